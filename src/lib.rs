@@ -1,0 +1,8 @@
+//! libsddpm: Scalable DDPM-Polycube. A closed triangle surface in; a polycube,
+//! an all-hex control mesh and a TH-spline3D volumetric spline with its Bézier
+//! extraction out. See docs/ and ../shared/DESIGN.md for the conventions.
+
+pub mod error;
+pub mod mesh;
+
+pub use error::{Error, Result, Status};
