@@ -2,7 +2,11 @@
 //! an all-hex control mesh and a TH-spline3D volumetric spline with its Bézier
 //! extraction out. See docs/ and ../shared/DESIGN.md for the conventions.
 
+pub mod context;
 pub mod error;
 pub mod mesh;
+pub mod polycube;
 
 pub use error::{Error, Result, Status};
+pub mod diffusion;
+pub mod cli;

@@ -1,1 +1,6 @@
-fn main(){}
+use clap::Parser;
+
+fn main() {
+    let cli = sddpm::cli::Cli::parse();
+    std::process::exit(sddpm::cli::run(cli));
+}

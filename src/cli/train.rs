@@ -1,0 +1,83 @@
+//! `sddpm train -o FILE [--epochs N] [--seed 42] [--resume CKPT]`
+
+use crate::diffusion::train::{checkpoint_dir_for, train, TrainConfig, TrainEvent};
+use crate::error::Result;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct TrainArgs {
+    /// Output weights file (written after every epoch; checkpoints go to FILE.ckpt/).
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    /// Number of epochs over the 5,000-sample set.
+    #[arg(long)]
+    pub epochs: Option<usize>,
+    /// Seed of the data set and of the run.
+    #[arg(long, default_value_t = 42)]
+    pub seed: u64,
+    /// Resume from a checkpoint folder (FILE.ckpt/ of an earlier run).
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+    /// Base width of the U-Net.
+    #[arg(long)]
+    pub width: Option<usize>,
+    /// Batch size.
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// Initial learning rate.
+    #[arg(long)]
+    pub lr: Option<f64>,
+    /// Train on the first N samples only (quick experiments).
+    #[arg(long)]
+    pub limit: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(a: &TrainArgs) -> Result<i32> {
+    let mut cfg = TrainConfig { seed: a.seed, limit_samples: a.limit, ..Default::default() };
+    cfg.dataset.seed = a.seed;
+    if let Some(e) = a.epochs {
+        cfg.epochs = e;
+    }
+    if let Some(w) = a.width {
+        cfg.model.base_width = w;
+    }
+    if let Some(b) = a.batch {
+        cfg.batch_size = b;
+    }
+    if let Some(lr) = a.lr {
+        cfg.learning_rate = lr;
+    }
+    if !a.quiet {
+        eprintln!(
+            "training: {} epochs, batch {}, width {}, lr {:.1e}, seed {}; checkpoints in {}",
+            cfg.epochs,
+            cfg.batch_size,
+            cfg.model.base_width,
+            cfg.learning_rate,
+            cfg.seed,
+            a.resume.clone().unwrap_or_else(|| checkpoint_dir_for(&a.output)).display()
+        );
+    }
+    let quiet = a.quiet;
+    let meta = train(&cfg, &a.output, a.resume.as_deref(), &mut |ev| {
+        if !quiet {
+            match ev {
+                TrainEvent::Log(r) => eprintln!(
+                    "step {:>7}  epoch {:>7.3}  loss {:.5}  lr {:.2e}  {:.1} samples/s",
+                    r.step, r.epoch, r.loss, r.lr, r.samples_per_second
+                ),
+                TrainEvent::EpochDone { epoch, seconds, checkpoint } => {
+                    eprintln!("epoch {epoch} done after {:.0} s; checkpoint {}", seconds, checkpoint.display())
+                }
+            }
+        }
+        true
+    })?;
+    if !quiet {
+        eprintln!("wrote {} ({} epochs, {} steps, final loss {:.5})", a.output.display(), meta.training.epochs, meta.training.steps, meta.training.final_loss);
+    }
+    Ok(0)
+}

@@ -1,0 +1,161 @@
+//! Reverse diffusion from the input geometry, batched over candidate contexts.
+//!
+//! Two samplers share one loop: the full ancestral sampler of DESIGN.md (all T
+//! steps, noise sigma_t^2 = b_t) and a strided deterministic sampler (DDIM on the
+//! mean-shifted variable) with fewer network evaluations. Every candidate has its
+//! own noise generator seeded from (seed, candidate index), so a candidate's result
+//! does not depend on which other candidates share its batch.
+
+use super::Model;
+use crate::context::Context;
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::polycube::dataset::item_rng;
+use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
+use crate::polycube::CONTEXT_DIM;
+use burn::tensor::{Tensor, TensorData};
+use rand_distr::{Distribution, StandardNormal};
+
+/// Options of the reverse process.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SamplerOptions {
+    /// Network evaluations: 0 or >= T runs the full T-step ancestral sampler;
+    /// 1..T runs the strided deterministic sampler with that many steps.
+    pub steps: usize,
+    /// Seed of the sampler noise.
+    pub seed: u64,
+    /// Keep the state every `keep_every` steps (0 = keep nothing) for visualisation.
+    pub keep_every: usize,
+    /// Candidates per network call.
+    pub max_batch: usize,
+}
+
+impl Default for SamplerOptions {
+    fn default() -> Self {
+        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16 }
+    }
+}
+
+/// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
+pub const DEFAULT_STEPS: usize = 0;
+
+/// Output of a batch: one [3, 64, 96] tensor per candidate, and the kept states.
+#[derive(Debug, Clone, Default)]
+pub struct SampleOutput {
+    pub tensors: Vec<Vec<f32>>,
+    /// Per candidate: (t, tensor) for every kept step, t = T first and 0 last.
+    pub trajectory: Vec<Vec<(usize, Vec<f32>)>>,
+}
+
+/// The timesteps the sampler visits: T, ..., 1 (full) or an evenly strided subset.
+pub fn timesteps(t_max: usize, steps: usize) -> Vec<usize> {
+    if steps == 0 || steps >= t_max {
+        return (1..=t_max).rev().collect();
+    }
+    let mut v: Vec<usize> = (0..steps).map(|i| t_max - (i * t_max) / steps).collect();
+    v.dedup();
+    v
+}
+
+/// Run the reverse process. `inputs[i]` is x'_T of candidate i (the input geometry
+/// laid out for context `contexts[i]`).
+pub fn reverse_diffusion(
+    model: &Model,
+    inputs: &[Vec<f32>],
+    contexts: &[Context],
+    opts: &SamplerOptions,
+    progress: &mut dyn Progress,
+) -> Result<SampleOutput> {
+    if inputs.len() != contexts.len() {
+        return Err(Error::InvalidArgument(format!(
+            "{} input tensors for {} contexts",
+            inputs.len(),
+            contexts.len()
+        )));
+    }
+    for (i, x) in inputs.iter().enumerate() {
+        if x.len() != TENSOR_LEN {
+            return Err(Error::InvalidArgument(format!("input tensor {i} has {} values, expected {TENSOR_LEN}", x.len())));
+        }
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(Error::InvalidArgument(format!("input tensor {i} holds a non-finite value")));
+        }
+    }
+    let n = inputs.len();
+    let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
+    let sched = &model.schedule;
+    let ts = timesteps(sched.steps(), opts.steps);
+    let ancestral = ts.len() == sched.steps();
+    let batch = opts.max_batch.max(1);
+    let total_calls = n.div_ceil(batch) * ts.len();
+    let mut calls = 0usize;
+    for start in (0..n).step_by(batch) {
+        let end = (start + batch).min(n);
+        let b = end - start;
+        let mut x: Vec<f32> = inputs[start..end].concat();
+        let mut rngs: Vec<_> = (start..end).map(|i| item_rng(opts.seed, i as u64)).collect();
+        let ctx: Vec<f32> = contexts[start..end].iter().flat_map(|c| c.one_hot()).collect();
+        let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &model.device);
+        if opts.keep_every > 0 {
+            for i in 0..b {
+                out.trajectory[start + i].push((sched.steps(), x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+            }
+        }
+        let mut next = vec![0f32; x.len()];
+        let mut z = vec![0f32; TENSOR_LEN];
+        for (si, &t) in ts.iter().enumerate() {
+            check_progress(progress, calls as f64 / total_calls as f64, "reverse diffusion")?;
+            let xt = Tensor::<4>::from_data(TensorData::new(x.clone(), [b, 3, TENSOR_H, TENSOR_W]), &model.device);
+            let eps = model.net.forward(xt, &vec![t; b], ctx_t.clone());
+            let eps: Vec<f32> = eps
+                .into_data()
+                .try_into_vec::<f32>()
+                .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
+            let s = ts.get(si + 1).copied().unwrap_or(0);
+            for i in 0..b {
+                let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;
+                if ancestral {
+                    let noise = if t > 1 {
+                        for v in z.iter_mut() {
+                            *v = StandardNormal.sample(&mut rngs[i]);
+                        }
+                        Some(&z[..])
+                    } else {
+                        None
+                    };
+                    sched.reverse_step(&x[r.clone()], &eps[r.clone()], t, noise, &mut next[r.clone()]);
+                } else {
+                    sched.ddim_step(&x[r.clone()], &eps[r.clone()], t, s, &mut next[r.clone()]);
+                }
+            }
+            std::mem::swap(&mut x, &mut next);
+            calls += 1;
+            if opts.keep_every > 0 && ((si + 1) % opts.keep_every == 0 || s == 0) {
+                for i in 0..b {
+                    out.trajectory[start + i].push((s, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                }
+            }
+        }
+        for i in 0..b {
+            out.tensors.push(x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec());
+        }
+    }
+    check_progress(progress, 1.0, "reverse diffusion")?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strided_timesteps() {
+        assert_eq!(timesteps(500, 0).len(), 500);
+        assert_eq!(timesteps(500, 500)[0], 500);
+        let t = timesteps(500, 50);
+        assert_eq!(t.len(), 50);
+        assert_eq!(t[0], 500);
+        assert_eq!(*t.last().unwrap(), 10);
+        assert!(t.windows(2).all(|w| w[0] > w[1]));
+    }
+}

@@ -1,0 +1,317 @@
+//! Training: MSE on the noise, Adam, linear learning-rate decay, seeded, with a
+//! checkpoint every epoch that a later run resumes from, and a loss log (CSV).
+//!
+//! Randomness (initial weights, epoch shuffles, timesteps and noise) all comes from
+//! `seed`: the weights from burn's device seed, the rest from per-step ChaCha
+//! generators, so a resumed run draws exactly what the uninterrupted run would have.
+
+use super::model::{Denoiser, ModelConfig};
+
+use super::schedule::{Schedule, ScheduleConfig};
+use super::weights::{self, TrainingInfo, WeightsMeta};
+use super::{device, load_net, net_bytes, Backend};
+use crate::error::{Error, Result};
+use crate::polycube::dataset::{generate, item_rng, DatasetConfig, Sample};
+use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
+use crate::polycube::CONTEXT_DIM;
+use burn::optim::grad_clipping::GradientClippingConfig;
+use burn::optim::{AdamConfig, GradientsParams};
+use burn::tensor::{Tensor, TensorData};
+use rand::RngExt;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Everything a training run depends on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TrainConfig {
+    pub epochs: usize,
+    pub batch_size: usize,
+    /// Initial learning rate.
+    pub learning_rate: f64,
+    /// The rate decays linearly to `learning_rate * final_lr_fraction` at the last step.
+    pub final_lr_fraction: f64,
+    pub seed: u64,
+    /// Log the mean loss every this many steps.
+    pub log_every: usize,
+    /// Use only the first n samples (for quick tests); None = the whole set.
+    pub limit_samples: Option<usize>,
+    pub dataset: DatasetConfig,
+    pub model: ModelConfig,
+    pub schedule: ScheduleConfig,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            epochs: 40,
+            batch_size: 16,
+            learning_rate: 6e-4,
+            final_lr_fraction: 0.05,
+            seed: 42,
+            log_every: 25,
+            limit_samples: None,
+            dataset: DatasetConfig::default(),
+            model: ModelConfig::default(),
+            schedule: ScheduleConfig::default(),
+        }
+    }
+}
+
+/// What is saved after every epoch.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CheckpointState {
+    pub config: TrainConfig,
+    pub epochs_done: usize,
+    pub steps_done: usize,
+    pub seconds: f64,
+    pub last_loss: f64,
+}
+
+/// One line of the loss log.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct LossRecord {
+    pub step: usize,
+    pub epoch: f64,
+    pub loss: f64,
+    pub lr: f64,
+    pub samples_per_second: f64,
+}
+
+/// Progress events of a run; the callback returns false to stop after the current step
+/// (a checkpoint is written first).
+pub enum TrainEvent<'a> {
+    Log(&'a LossRecord),
+    EpochDone { epoch: usize, seconds: f64, checkpoint: &'a Path },
+}
+
+fn checkpoint_files(dir: &Path) -> (PathBuf, PathBuf, PathBuf, PathBuf) {
+    (dir.join("state.json"), dir.join("net.bpk"), dir.join("optim.bpk"), dir.join("loss.csv"))
+}
+
+/// Adam with gradient-norm clipping at 1 (guards the first steps of a fresh network).
+fn adam() -> burn::optim::ModuleOptimizer {
+    AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(1.0))).init()
+}
+
+/// The checkpoint folder used for an output weights path: `<out>.ckpt/`.
+pub fn checkpoint_dir_for(out: &Path) -> PathBuf {
+    let mut s = out.as_os_str().to_owned();
+    s.push(".ckpt");
+    PathBuf::from(s)
+}
+
+fn io<E: std::fmt::Display>(p: &Path) -> impl FnOnce(E) -> Error + '_ {
+    move |e| Error::io(p.display(), e)
+}
+
+/// Train (or resume) and write the weights file `out` after every epoch.
+pub fn train(
+    requested: &TrainConfig,
+    out: &Path,
+    resume: Option<&Path>,
+    on_event: &mut dyn FnMut(TrainEvent) -> bool,
+) -> Result<WeightsMeta> {
+    let ad = device(Backend::Flex).autodiff();
+    let (cfg, ckdir, mut net, mut opt, mut epoch0, mut step, mut seconds0, mut last_loss);
+    match resume {
+        Some(dir) => {
+            let (st, netf, optf, _) = checkpoint_files(dir);
+            let state: CheckpointState = serde_json::from_slice(&std::fs::read(&st).map_err(io(&st))?)
+                .map_err(|e| Error::parse(st.display(), e.to_string()))?;
+            // Everything but the number of epochs comes from the checkpoint.
+            cfg = TrainConfig { epochs: requested.epochs, ..state.config.clone() };
+            let rec = std::fs::read(&netf).map_err(io(&netf))?;
+            net = load_net(&cfg.model, &rec, &ad)?;
+            let o = adam();
+            opt = o.load(&optf).map_err(|e| Error::Model(format!("{}: {e:?}", optf.display())))?;
+            epoch0 = state.epochs_done;
+            step = state.steps_done;
+            seconds0 = state.seconds;
+            last_loss = state.last_loss;
+            ckdir = dir.to_path_buf();
+        }
+        None => {
+            cfg = requested.clone();
+            ad.seed(cfg.seed);
+            net = Denoiser::new(&cfg.model, &ad);
+            opt = adam();
+            epoch0 = 0;
+            step = 0;
+            seconds0 = 0.0;
+            last_loss = f64::NAN;
+            ckdir = checkpoint_dir_for(out);
+            std::fs::create_dir_all(&ckdir).map_err(io(&ckdir))?;
+            let (_, _, _, csv) = checkpoint_files(&ckdir);
+            std::fs::write(&csv, "step,epoch,loss,lr,samples_per_second\n").map_err(io(&csv))?;
+        }
+    }
+    train_loop(&cfg, out, &ckdir, &mut net, &mut opt, &mut epoch0, &mut step, &mut seconds0, &mut last_loss, on_event)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn train_loop(
+    cfg: &TrainConfig,
+    out: &Path,
+    ckdir: &Path,
+    net: &mut Denoiser,
+    opt: &mut burn::optim::ModuleOptimizer,
+    epoch0: &mut usize,
+    step: &mut usize,
+    seconds0: &mut f64,
+    last_loss: &mut f64,
+    on_event: &mut dyn FnMut(TrainEvent) -> bool,
+) -> Result<WeightsMeta> {
+    let ad = device(Backend::Flex).autodiff();
+    let mut data: Vec<Sample> = generate(&cfg.dataset);
+    if let Some(n) = cfg.limit_samples {
+        data.truncate(n.max(1));
+    }
+    let sched = Schedule::new(cfg.schedule.clone());
+    let bs = cfg.batch_size.max(1);
+    let steps_per_epoch = data.len().div_ceil(bs);
+    let total_steps = steps_per_epoch * cfg.epochs;
+    let (_, _, _, csv) = checkpoint_files(ckdir);
+    let mut csv_file = std::fs::OpenOptions::new().append(true).create(true).open(&csv).map_err(io(&csv))?;
+    let started = Instant::now();
+    let mut window_loss = 0.0;
+    let mut window_n = 0usize;
+    let mut window_start = Instant::now();
+    let mut stop = false;
+    let mut meta = meta_for(cfg, *epoch0, *step, *last_loss, *seconds0);
+    for epoch in *epoch0..cfg.epochs {
+        let mut perm: Vec<usize> = (0..data.len()).collect();
+        let mut rng = item_rng(cfg.seed ^ 0x5348_5546, epoch as u64);
+        for i in (1..perm.len()).rev() {
+            let j = rng.random_range(0..=i);
+            perm.swap(i, j);
+        }
+        for chunk in perm.chunks(bs) {
+            let b = chunk.len();
+            let mut srng = item_rng(cfg.seed ^ 0x4e4f_4953, *step as u64);
+            let mut x0 = Vec::with_capacity(b * TENSOR_LEN);
+            let mut ctx = Vec::with_capacity(b * CONTEXT_DIM);
+            for &i in chunk {
+                x0.extend_from_slice(&data[i].tensor);
+                ctx.extend_from_slice(&data[i].context.one_hot());
+            }
+            let ts: Vec<usize> = (0..b).map(|_| srng.random_range(1..=sched.steps())).collect();
+            let z: Vec<f32> = (0..b * TENSOR_LEN).map(|_| StandardNormal.sample(&mut srng)).collect();
+            let mut xt = vec![0f32; b * TENSOR_LEN];
+            for i in 0..b {
+                let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;
+                sched.forward_sample(&x0[r.clone()], &z[r.clone()], ts[i], &mut xt[r]);
+            }
+            let xt = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &ad);
+            let zt = Tensor::<4>::from_data(TensorData::new(z, [b, 3, TENSOR_H, TENSOR_W]), &ad);
+            let ct = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &ad);
+            let pred = net.forward(xt, &ts, ct);
+            let loss = (pred - zt).powi_scalar(2).mean();
+            let lv: f32 = loss.clone().into_scalar();
+            if !lv.is_finite() {
+                return Err(Error::Model(format!("training diverged at step {} (loss {lv})", *step)));
+            }
+            let grads = GradientsParams::from_grads(loss.backward(), &*net);
+            let frac = if total_steps > 1 { *step as f64 / (total_steps - 1) as f64 } else { 0.0 };
+            let lr = cfg.learning_rate * (1.0 - (1.0 - cfg.final_lr_fraction) * frac.min(1.0));
+            *net = opt.step(lr, net.clone(), grads);
+            *step += 1;
+            *last_loss = lv as f64;
+            window_loss += lv as f64;
+            window_n += 1;
+            if window_n >= cfg.log_every.max(1) {
+                let rec = LossRecord {
+                    step: *step,
+                    epoch: *step as f64 / steps_per_epoch as f64,
+                    loss: window_loss / window_n as f64,
+                    lr,
+                    samples_per_second: (window_n * bs) as f64 / window_start.elapsed().as_secs_f64(),
+                };
+                writeln!(csv_file, "{},{:.4},{:.6},{:.6e},{:.2}", rec.step, rec.epoch, rec.loss, rec.lr, rec.samples_per_second)
+                    .map_err(io(&csv))?;
+                window_loss = 0.0;
+                window_n = 0;
+                window_start = Instant::now();
+                if !on_event(TrainEvent::Log(&rec)) {
+                    stop = true;
+                    break;
+                }
+            }
+        }
+        let seconds = *seconds0 + started.elapsed().as_secs_f64();
+        let done = if stop { epoch } else { epoch + 1 };
+        meta = meta_for(cfg, done, *step, *last_loss, seconds);
+        save_checkpoint(cfg, ckdir, net, opt, done, *step, seconds, *last_loss)?;
+        let bytes = weights::encode(&meta, &net_bytes(net)?);
+        let tmp = out.with_extension("tmp");
+        std::fs::write(&tmp, &bytes).map_err(io(&tmp))?;
+        std::fs::rename(&tmp, out).map_err(io(out))?;
+        if stop || !on_event(TrainEvent::EpochDone { epoch: done, seconds, checkpoint: ckdir }) {
+            break;
+        }
+    }
+    Ok(meta)
+}
+
+fn meta_for(cfg: &TrainConfig, epochs: usize, steps: usize, loss: f64, seconds: f64) -> WeightsMeta {
+    WeightsMeta {
+        format_version: 1,
+        library_version: env!("CARGO_PKG_VERSION").to_string(),
+        model: cfg.model.clone(),
+        schedule: cfg.schedule.clone(),
+        dataset: cfg.dataset.clone(),
+        training: TrainingInfo {
+            seed: cfg.seed,
+            epochs,
+            steps,
+            batch_size: cfg.batch_size,
+            learning_rate: cfg.learning_rate,
+            final_loss: loss,
+            seconds,
+        },
+        dtype: "f32".into(),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn save_checkpoint(
+    cfg: &TrainConfig,
+    dir: &Path,
+    net: &Denoiser,
+    opt: &burn::optim::ModuleOptimizer,
+    epochs_done: usize,
+    steps_done: usize,
+    seconds: f64,
+    last_loss: f64,
+) -> Result<()> {
+    let (st, netf, optf, _) = checkpoint_files(dir);
+    let nb = net_bytes(net)?;
+    let tmp = netf.with_extension("tmp");
+    std::fs::write(&tmp, nb).map_err(io(&tmp))?;
+    std::fs::rename(&tmp, &netf).map_err(io(&netf))?;
+    let tmp = optf.with_extension("tmp");
+    opt.save(&tmp).map_err(|e| Error::Model(format!("{}: {e:?}", tmp.display())))?;
+    std::fs::rename(&tmp, &optf).map_err(io(&optf))?;
+    let state = CheckpointState { config: cfg.clone(), epochs_done, steps_done, seconds, last_loss };
+    let tmp = st.with_extension("tmp");
+    std::fs::write(&tmp, serde_json::to_vec_pretty(&state).unwrap()).map_err(io(&tmp))?;
+    std::fs::rename(&tmp, &st).map_err(io(&st))
+}
+
+/// Read the loss log of a checkpoint folder: (step, epoch, loss).
+pub fn read_loss_csv(path: &Path) -> Result<Vec<(usize, f64, f64)>> {
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
+    let mut v = Vec::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() >= 3 {
+            if let (Ok(s), Ok(e), Ok(l)) = (f[0].parse(), f[1].parse(), f[2].parse()) {
+                v.push((s, e, l));
+            }
+        }
+    }
+    Ok(v)
+}
