@@ -3,6 +3,8 @@
 //! extraction out. See docs/ and ../shared/DESIGN.md for the conventions.
 
 pub mod error;
+pub mod ffi;
+pub mod geometry;
 pub mod mesh;
 
 pub use error::{Error, Result, Status};

@@ -1,0 +1,42 @@
+//! Command-line definitions. Each command lives in its own file and returns
+//! an exit code: 0 on success, 2 on bad input (with `error: <what>` on stderr).
+
+use clap::{Parser, Subcommand};
+
+mod info;
+
+/// Exit code for bad input (DESIGN.md).
+pub const EXIT_BAD_INPUT: i32 = 2;
+
+#[derive(Parser, Debug)]
+#[command(name = "sddpm", version, about = "Scalable DDPM-Polycube: CAD surface to polycube, all-hex mesh and volumetric spline")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Read a mesh, print what was measured, exit 2 if it cannot go on to meshing.
+    Info(info::InfoArgs),
+}
+
+pub fn run() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    match cli.command {
+        Command::Info(args) => info::run(&args),
+    }
+}
+
+/// Print `error: <what>` on stderr and return the bad-input exit code.
+pub fn fail(what: impl std::fmt::Display) -> i32 {
+    eprintln!("error: {what}");
+    EXIT_BAD_INPUT
+}
