@@ -3,10 +3,11 @@
 //! extraction out. See docs/ and ../shared/DESIGN.md for the conventions.
 
 pub mod context;
+pub mod diffusion;
 pub mod error;
+pub mod ffi;
+pub mod geometry;
 pub mod mesh;
 pub mod polycube;
 
 pub use error::{Error, Result, Status};
-pub mod diffusion;
-pub mod cli;

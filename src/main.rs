@@ -1,6 +1,7 @@
-use clap::Parser;
+//! The `sddpm` command line (see DESIGN.md "Command line" and `sddpm --help`).
+
+mod cli;
 
 fn main() {
-    let cli = sddpm::cli::Cli::parse();
-    std::process::exit(sddpm::cli::run(cli));
+    std::process::exit(cli::run());
 }

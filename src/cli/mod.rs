@@ -1,11 +1,16 @@
-//! The `sddpm` command line (DESIGN.md, "Command line").
-
-pub mod train;
+//! Command-line definitions. Each command lives in its own file and returns
+//! an exit code: 0 on success, 2 on bad input (with `error: <what>` on stderr).
 
 use clap::{Parser, Subcommand};
 
+mod info;
+mod train;
+
+/// Exit code for bad input (DESIGN.md).
+pub const EXIT_BAD_INPUT: i32 = 2;
+
 #[derive(Parser, Debug)]
-#[command(name = "sddpm", version, about = "CAD surface to polycube, all-hex mesh and volumetric spline (SDDPM)")]
+#[command(name = "sddpm", version, about = "Scalable DDPM-Polycube: CAD surface to polycube, all-hex mesh and volumetric spline")]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -13,20 +18,29 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Train the diffusion model.
+    /// Read a mesh, print what was measured, exit 2 if it cannot go on to meshing.
+    Info(info::InfoArgs),
+    /// Train the diffusion model (checkpoints every epoch; --resume continues).
     Train(train::TrainArgs),
 }
 
-/// Run a parsed command line; returns the process exit code.
-pub fn run(cli: Cli) -> i32 {
-    let r = match &cli.command {
-        Command::Train(a) => train::run(a),
-    };
-    match r {
-        Ok(code) => code,
+pub fn run() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
         Err(e) => {
-            eprintln!("error: {e}");
-            2
+            let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
+            let _ = e.print();
+            return code;
         }
+    };
+    match cli.command {
+        Command::Info(args) => info::run(&args),
+        Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }
+}
+
+/// Print `error: <what>` on stderr and return the bad-input exit code.
+pub fn fail(what: impl std::fmt::Display) -> i32 {
+    eprintln!("error: {what}");
+    EXIT_BAD_INPUT
 }

@@ -1,7 +1,7 @@
 //! `sddpm train -o FILE [--epochs N] [--seed 42] [--resume CKPT]`
 
-use crate::diffusion::train::{checkpoint_dir_for, train, TrainConfig, TrainEvent};
-use crate::error::Result;
+use sddpm::diffusion::train::{checkpoint_dir_for, train, TrainConfig, TrainEvent};
+use sddpm::Result;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]

@@ -1,0 +1,189 @@
+//! Self-intersection test.
+//!
+//! Broad phase: a BVH over the triangles' bounding boxes (geometry::Bvh); every
+//! pair whose boxes overlap goes to the narrow phase, in parallel.
+//! Narrow phase, with Shewchuk's exact orientation predicates (crate `robust`):
+//! - non-coplanar pairs cross when an edge of one passes strictly through the
+//!   other (its ends strictly on both sides of the other's plane and the
+//!   crossing point strictly inside the triangle). Pairs that share a vertex are
+//!   covered by the same rule: edges at the shared vertex never pass strictly.
+//! - coplanar pairs overlap when two edges cross properly, a corner of one lies
+//!   strictly inside the other, or (sharing a corner) an edge leaving the shared
+//!   corner runs into the other; two coplanar triangles sharing an edge overlap
+//!   when they lie on the same side of it (a fold).
+//!   Contacts that only touch (a corner on a face, edges meeting) are not counted.
+//!   Triangles of zero area are skipped (the check reports them separately).
+
+use super::TriMesh;
+use crate::geometry::vec3::*;
+use crate::geometry::{Aabb, Bvh};
+use rayon::prelude::*;
+use robust::{orient2d, orient3d, Coord, Coord3D};
+
+fn c3(p: [f64; 3]) -> Coord3D<f64> {
+    Coord3D { x: p[0], y: p[1], z: p[2] }
+}
+
+fn o3(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> f64 {
+    orient3d(c3(a), c3(b), c3(c), c3(d))
+}
+
+fn sgn(x: f64) -> i8 {
+    if x > 0.0 {
+        1
+    } else if x < 0.0 {
+        -1
+    } else {
+        0
+    }
+}
+
+/// Pairs (s, t), s < t, of triangles that cross, sorted; at most `limit` pairs
+/// are returned (the search stops once it has found them).
+pub fn self_intersections(mesh: &TriMesh, limit: usize) -> Vec<(u32, u32)> {
+    let nv = mesh.vertices.len();
+    let nt = mesh.triangles.len();
+    let ok = |t: usize| {
+        let tri = mesh.triangles[t];
+        tri.iter().all(|&v| (v as usize) < nv)
+            && tri[0] != tri[1]
+            && tri[1] != tri[2]
+            && tri[0] != tri[2]
+            && norm(tri_normal(mesh.vertices[tri[0] as usize], mesh.vertices[tri[1] as usize], mesh.vertices[tri[2] as usize])) > 0.0
+    };
+    let boxes: Vec<Aabb> = (0..nt)
+        .map(|t| if ok(t) { Aabb::of_points(&mesh.triangles[t].map(|v| mesh.vertices[v as usize])) } else { Aabb::EMPTY })
+        .collect();
+    let bvh = Bvh::from_boxes(&boxes);
+    let found = std::sync::atomic::AtomicUsize::new(0);
+    let mut pairs: Vec<(u32, u32)> = (0..nt)
+        .into_par_iter()
+        .filter(|&s| boxes[s].min[0] <= boxes[s].max[0])
+        .flat_map_iter(|s| {
+            let mut out = Vec::new();
+            if found.load(std::sync::atomic::Ordering::Relaxed) >= limit {
+                return out;
+            }
+            bvh.for_each_overlap(&boxes[s], |t| {
+                if (t as usize) > s && triangles_cross(mesh, s, t as usize) {
+                    out.push((s as u32, t));
+                }
+            });
+            found.fetch_add(out.len(), std::sync::atomic::Ordering::Relaxed);
+            out
+        })
+        .collect();
+    pairs.sort_unstable();
+    pairs.truncate(limit);
+    pairs
+}
+
+/// Whether triangles s and t of the mesh cross (see the module docs).
+pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
+    let ts = mesh.triangles[s];
+    let tt = mesh.triangles[t];
+    let p = ts.map(|v| mesh.vertices[v as usize]);
+    let q = tt.map(|v| mesh.vertices[v as usize]);
+    let shared: Vec<(usize, usize)> =
+        (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).filter(|&(i, j)| ts[i] == tt[j]).collect();
+    if shared.len() == 3 {
+        return true; // the same triangle twice
+    }
+    let oq = q.map(|x| sgn(o3(p[0], p[1], p[2], x)));
+    if oq.iter().all(|&o| o > 0) || oq.iter().all(|&o| o < 0) {
+        return false;
+    }
+    if oq.iter().all(|&o| o == 0) {
+        return coplanar_overlap(p, q, &shared);
+    }
+    let op = p.map(|x| sgn(o3(q[0], q[1], q[2], x)));
+    if op.iter().all(|&o| o > 0) || op.iter().all(|&o| o < 0) {
+        return false;
+    }
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        if oq[i] * oq[j] < 0 && segment_through(q[i], q[j], p) {
+            return true;
+        }
+        if op[i] * op[j] < 0 && segment_through(p[i], p[j], q) {
+            return true;
+        }
+    }
+    false
+}
+
+/// Segment ab (already known to have its ends strictly on both sides of the
+/// triangle's plane) passes strictly through the interior of triangle t.
+fn segment_through(a: [f64; 3], b: [f64; 3], t: [[f64; 3]; 3]) -> bool {
+    let s0 = sgn(o3(a, b, t[0], t[1]));
+    let s1 = sgn(o3(a, b, t[1], t[2]));
+    let s2 = sgn(o3(a, b, t[2], t[0]));
+    s0 != 0 && s0 == s1 && s1 == s2
+}
+
+fn coplanar_overlap(p: [[f64; 3]; 3], q: [[f64; 3]; 3], shared: &[(usize, usize)]) -> bool {
+    // project away the dominant axis of p's normal
+    let n = tri_normal(p[0], p[1], p[2]);
+    let drop = if n[0].abs() >= n[1].abs() && n[0].abs() >= n[2].abs() {
+        0
+    } else if n[1].abs() >= n[2].abs() {
+        1
+    } else {
+        2
+    };
+    let (u, v) = match drop {
+        0 => (1, 2),
+        1 => (2, 0),
+        _ => (0, 1),
+    };
+    let pr = |x: [f64; 3]| Coord { x: x[u], y: x[v] };
+    let a = p.map(pr);
+    let b = q.map(pr);
+    let o = |x: Coord<f64>, y: Coord<f64>, z: Coord<f64>| sgn(orient2d(x, y, z));
+    let inside = |tri: &[Coord<f64>; 3], x: Coord<f64>| {
+        let s0 = o(tri[0], tri[1], x);
+        let s1 = o(tri[1], tri[2], x);
+        let s2 = o(tri[2], tri[0], x);
+        s0 != 0 && s0 == s1 && s1 == s2
+    };
+    if shared.len() == 2 {
+        // fold over the shared edge: the two free corners on the same side of it
+        let (i0, j0) = shared[0];
+        let (i1, _) = shared[1];
+        let pi = 3 - i0 - i1;
+        let qj = 3 - j0 - shared[1].1;
+        let side_p = o(a[i0], a[i1], a[pi]);
+        let side_q = o(a[i0], a[i1], b[qj]);
+        return side_p != 0 && side_p == side_q;
+    }
+    // proper edge crossings
+    for i in 0..3 {
+        for j in 0..3 {
+            let (a0, a1) = (a[i], a[(i + 1) % 3]);
+            let (b0, b1) = (b[j], b[(j + 1) % 3]);
+            let d1 = o(a0, a1, b0);
+            let d2 = o(a0, a1, b1);
+            let d3 = o(b0, b1, a0);
+            let d4 = o(b0, b1, a1);
+            if d1 * d2 < 0 && d3 * d4 < 0 {
+                return true;
+            }
+        }
+    }
+    // a corner strictly inside the other
+    let is_shared_p = |i: usize| shared.iter().any(|s| s.0 == i);
+    let is_shared_q = |j: usize| shared.iter().any(|s| s.1 == j);
+    if (0..3).any(|j| !is_shared_q(j) && inside(&a, b[j])) || (0..3).any(|i| !is_shared_p(i) && inside(&b, a[i])) {
+        return true;
+    }
+    // sharing one corner: an edge leaving it runs into the other triangle's angle
+    if let Some(&(i, j)) = shared.first() {
+        let mid = |x: Coord<f64>, y: Coord<f64>| Coord { x: 0.5 * (x.x + y.x), y: 0.5 * (x.y + y.y) };
+        for k in 1..3 {
+            if inside(&a, mid(b[j], b[(j + k) % 3])) || inside(&b, mid(a[i], a[(i + k) % 3])) {
+                return true;
+            }
+        }
+    }
+    false
+}
