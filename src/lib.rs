@@ -11,3 +11,4 @@ pub mod mesh;
 pub mod polycube;
 
 pub use error::{Error, Result, Status};
+pub mod hex;

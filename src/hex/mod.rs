@@ -1,0 +1,20 @@
+//! All-hex control mesh: parametric mapping of the polycube, octree subdivision,
+//! pillowing, smoothing and Jacobian optimisation (issue 6).
+
+pub mod quality;
+
+use serde::{Deserialize, Serialize};
+
+/// An unstructured all-hex mesh. Elements use VTK_HEXAHEDRON node order
+/// (bottom face 0-3 counter-clockwise seen from above, top face 4-7 above them).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct HexMesh {
+    pub nodes: Vec<[f64; 3]>,
+    pub elements: Vec<[u32; 8]>,
+}
+
+impl HexMesh {
+    pub fn element_corners(&self, e: usize) -> [[f64; 3]; 8] {
+        self.elements[e].map(|i| self.nodes[i as usize])
+    }
+}
