@@ -11,4 +11,5 @@ pub mod mesh;
 pub mod polycube;
 
 pub use error::{Error, Result, Status};
+pub mod export;
 pub mod hex;

@@ -640,9 +640,15 @@ mod tests {
         // BHC+Z under a BHC-Z: joined blind holes make a sealed cavity.
         let v = check(&assemble(&labels(&[(0, BhcPz), (6, BhcMz)])));
         assert!(!v.valid);
-        // BHC+Z under a THC+Z: a through hole again -> genus 1.
+        // BHC+Z under a THC+Z: the hole runs on through the upper cell but the BHC's
+        // bottom stays closed -> one deeper blind hole, genus 0.
         let v = check(&assemble(&labels(&[(0, BhcPz), (6, ThcZ)])));
-        assert_eq!(v.genus, Some(1));
+        assert!(v.valid);
+        assert_eq!(v.genus, Some(0));
+        // A THC+Z column (one hole through two cells) beside a THC+X row capped by the
+        // column on its -X end (a blind hole): genus 1.
+        let v = check(&assemble(&labels(&[(0, ThcZ), (6, ThcZ), (1, ThcX), (2, ThcX)])));
+        assert_eq!(v.genus, Some(1 + 0), "{:?}", v.reason);
         // Two cubes touching only along an edge.
         let v = check(&assemble(&labels(&[(0, Cube), (4, Cube)])));
         assert!(!v.valid);

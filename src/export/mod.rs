@@ -1,0 +1,3 @@
+//! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
+
+pub mod vtk;
