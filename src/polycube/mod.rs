@@ -3,6 +3,8 @@
 
 pub mod assembly;
 pub mod dataset;
+pub mod inference;
+pub mod orientation;
 pub mod primitive;
 pub mod tensor;
 
