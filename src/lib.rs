@@ -9,6 +9,7 @@ pub mod ffi;
 pub mod geometry;
 pub mod mesh;
 pub mod polycube;
+pub mod verify;
 
 pub use error::{Error, Result, Status};
 pub mod export;

@@ -19,6 +19,7 @@
 //!    scaled so that the longest bounding-box edge is 2.
 
 pub mod bvh;
+pub mod orient;
 pub mod vec3;
 
 pub use bvh::{closest_point_on_triangle, Aabb, Bvh, ClosestPoint, SurfaceLocator};
