@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod evalmodel;
 mod info;
 mod train;
 
@@ -20,6 +21,9 @@ pub struct Cli {
 pub enum Command {
     /// Read a mesh, print what was measured, exit 2 if it cannot go on to meshing.
     Info(info::InfoArgs),
+    /// Measure a model on held-in synthetic inputs (developer command).
+    #[command(name = "eval-model")]
+    EvalModel(evalmodel::EvalArgs),
     /// Train the diffusion model (checkpoints every epoch; --resume continues).
     Train(train::TrainArgs),
 }
@@ -35,6 +39,7 @@ pub fn run() -> i32 {
     };
     match cli.command {
         Command::Info(args) => info::run(&args),
+        Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }
 }

@@ -1,5 +1,11 @@
 //! Reverse diffusion from the input geometry, batched over candidate contexts.
 //!
+//! Null cells are known: their x_0 is 512 copies of (0, 0, 0). After every step
+//! their blocks are replaced by a fresh forward sample of that known x_0 at the new
+//! timestep (conditioning by replacement, as in inpainting), and by exact zeros at
+//! the end; the network therefore always sees null blocks as it saw them in
+//! training, and the output's null cells are exactly the placeholders of DESIGN.md.
+//!
 //! Two samplers share one loop: the full ancestral sampler of DESIGN.md (all T
 //! steps, noise sigma_t^2 = b_t) and a strided deterministic sampler (DDIM on the
 //! mean-shifted variable) with fewer network evaluations. Every candidate has its
@@ -11,7 +17,8 @@ use crate::context::Context;
 use crate::error::{check_progress, Error, Progress, Result};
 use crate::polycube::dataset::item_rng;
 use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
-use crate::polycube::CONTEXT_DIM;
+use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL};
+use crate::polycube::{Primitive, CONTEXT_DIM, NUM_CELLS};
 use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -126,6 +133,26 @@ pub fn reverse_diffusion(
                     sched.reverse_step(&x[r.clone()], &eps[r.clone()], t, noise, &mut next[r.clone()]);
                 } else {
                     sched.ddim_step(&x[r.clone()], &eps[r.clone()], t, s, &mut next[r.clone()]);
+                }
+            }
+            // Known null blocks: a forward sample of x_0 = 0 at the new timestep s.
+            for i in 0..b {
+                let ctx = &contexts[start + i];
+                let base = i * TENSOR_LEN;
+                let (sd, shift) = ((1.0 - sched.alpha_bar[s]).sqrt(), sched.qcoef[s]);
+                for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
+                    for p in 0..POINTS_PER_CELL {
+                        let (r, col) = slot(n, p);
+                        for ch in 0..3 {
+                            let v = if s == 0 {
+                                0.0
+                            } else {
+                                let zv: f64 = StandardNormal.sample(&mut rngs[i]);
+                                sd * zv + shift * sched.config.q[ch]
+                            };
+                            next[base + flat(ch, r, col)] = v as f32;
+                        }
+                    }
                 }
             }
             std::mem::swap(&mut x, &mut next);

@@ -2,6 +2,8 @@
 //! and the expansion of partial constraints (counts + spatial arrangement) into every
 //! valid context that satisfies them.
 
+pub mod generate;
+
 use crate::error::{Error, Result};
 use crate::polycube::assembly::{assemble, check, VoxelGrid, Validity};
 use crate::polycube::primitive::{cell_coords, Family, Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
