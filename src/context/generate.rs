@@ -11,7 +11,7 @@ use crate::geometry::orient::{align_axes, FrameChoice};
 use crate::geometry::{sample_surface, Alignment, SurfaceSample};
 use crate::mesh::TriMesh;
 use crate::polycube::dataset::item_rng;
-use crate::polycube::inference::{prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
+use crate::polycube::inference::{occupancy_only, prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
 use crate::polycube::orientation::{rotations, AxisRotation};
 use crate::polycube::tensor::{unlayout, POINTS_PER_CELL};
 use crate::polycube::NUM_CELLS;
@@ -46,6 +46,10 @@ pub struct PolycubeOptions {
     pub min_occupied_fraction: f64,
     /// Orientations kept per context after the pre-check (best first; default 1).
     pub orientations_per_context: usize,
+    /// Pre-check: the largest geometric fit score (penalty Chamfer distance, squared
+    /// cell units, between the mapped input and the context's exact polycube surface)
+    /// a candidate may have to be diffused (default 0.05).
+    pub max_fit: f64,
     /// Surface samples drawn from the input (shared by every candidate).
     pub oversampling: usize,
     /// Seed of sampling and diffusion.
@@ -61,6 +65,7 @@ impl Default for PolycubeOptions {
             max_in_empty_fraction: 0.03,
             min_occupied_fraction: 0.2,
             orientations_per_context: 1,
+            max_fit: 0.05,
             oversampling: DEFAULT_OVERSAMPLING,
             seed: 0,
         }
@@ -93,12 +98,14 @@ pub struct Candidate {
     #[serde(skip)]
     pub axis_rotation: AxisRotation,
     pub occupancy: Occupancy,
+    /// Geometric fit of the mapped input to the exact polycube (squared cell units).
+    pub fit: f64,
     pub stage: Stage,
     pub report: Option<VerificationReport>,
     /// Mean squared distance between the output and the input samples it started
     /// from (model frame); lower means the polycube stayed closer to the input.
     pub fidelity: Option<f64>,
-    /// Ranking score (lower is better): mean target PCD + fidelity.
+    /// Ranking score (lower is better): geometric fit + mean target PCD.
     pub score: Option<f64>,
     #[serde(skip)]
     pub input: Option<InferenceInput>,
@@ -230,50 +237,155 @@ pub fn prepare_input(mesh: &TriMesh, opts: &PolycubeOptions) -> Result<PreparedI
     Ok(PreparedInput { alignment, frame, samples })
 }
 
-/// The occupancy pre-check of one context over the orientation search: returns the
-/// best orientations (lowest surface fraction in empty cells) as candidates.
+/// Samples used by the cheap pre-check (a prefix of the shared samples).
+pub const PRECHECK_SAMPLES: usize = 8192;
+
+/// The occupancy pre-check of one context over the orientation search: the best
+/// orientations (lowest surface fraction in empty cells, then fewest starved cells)
+/// become candidates; only those that pass get their full inference tensor.
 pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) -> Result<Vec<Candidate>> {
     let rots: Vec<AxisRotation> = match opts.orientations {
         OrientationSearch::Identity => vec![rotations()[0]],
         OrientationSearch::SignFlips => rotations()[..4].to_vec(),
         OrientationSearch::All => rotations().to_vec(),
     };
-    let mut all = Vec::with_capacity(rots.len());
-    for (k, r) in rots.iter().enumerate() {
-        let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
-        let inp = prepare(&input.samples, ctx, *r, opts.min_occupied_fraction, &mut rng)?;
-        let ok = inp.occupancy.in_empty_cells <= opts.max_in_empty_fraction && inp.occupancy.starved_cells.is_empty();
-        let stage = if ok { Stage::Pending } else { Stage::Occupancy };
-        all.push(Candidate {
+    let sub = &input.samples[..input.samples.len().min(PRECHECK_SAMPLES)];
+    let mut scored: Vec<(usize, Occupancy)> = rots
+        .iter()
+        .enumerate()
+        .filter_map(|(k, r)| occupancy_only(sub, ctx, *r, opts.min_occupied_fraction).map(|o| (k, o)))
+        .collect();
+    if scored.is_empty() {
+        return Err(Error::InvalidContext(format!("{ctx}: no occupied cell")));
+    }
+    scored.sort_by(|a, b| {
+        a.1.starved_cells.len().min(1).cmp(&b.1.starved_cells.len().min(1))
+            .then(a.1.in_empty_cells.total_cmp(&b.1.in_empty_cells))
+            .then(a.1.starved_cells.len().cmp(&b.1.starved_cells.len()))
+            .then(a.0.cmp(&b.0))
+    });
+    let passes = |o: &Occupancy| o.in_empty_cells <= opts.max_in_empty_fraction && o.starved_cells.is_empty();
+    // Among the orientations the occupancy allows, rank by geometric fit.
+    let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    let target = polycube_samples(ctx, FIT_SAMPLES);
+    let mut ranked: Vec<(usize, Occupancy, f64)> = scored
+        .into_iter()
+        .map(|(k, o)| {
+            let f = if passes(&o) { fit_score(fit_sub, ctx, rots[k], &target) } else { f64::INFINITY };
+            (k, o, f)
+        })
+        .collect();
+    ranked.sort_by(|a, b| (!passes(&a.1)).cmp(&!passes(&b.1)).then(a.2.total_cmp(&b.2)).then(a.0.cmp(&b.0)));
+    let n_pass = ranked.iter().filter(|(_, o, f)| passes(o) && *f <= opts.max_fit).count();
+    let keep = if n_pass == 0 { 1 } else { n_pass.min(opts.orientations_per_context.max(1)) };
+    let mut out = Vec::with_capacity(keep);
+    for (k, occ, fit) in ranked.into_iter().take(keep) {
+        let r = rots[k];
+        let ok = passes(&occ) && fit <= opts.max_fit;
+        let input_t = if ok {
+            let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
+            Some(prepare(&input.samples, ctx, r, opts.min_occupied_fraction, &mut rng)?)
+        } else {
+            None
+        };
+        out.push(Candidate {
             context: *ctx,
             labels: ctx.label_values(),
             rotation: r.name(),
-            axis_rotation: *r,
-            occupancy: inp.occupancy.clone(),
-            stage,
+            axis_rotation: r,
+            occupancy: input_t.as_ref().map(|i| i.occupancy.clone()).unwrap_or(occ),
+            fit,
+            stage: if ok { Stage::Pending } else { Stage::Occupancy },
             report: None,
             fidelity: None,
             score: None,
-            input: Some(inp),
+            input: input_t,
             output: None,
         });
     }
-    // Best orientations first: fewest surface in empty cells, then starved cells.
-    all.sort_by(|a, b| {
-        (a.stage == Stage::Occupancy)
-            .cmp(&(b.stage == Stage::Occupancy))
-            .then(a.occupancy.in_empty_cells.total_cmp(&b.occupancy.in_empty_cells))
-            .then(a.occupancy.starved_cells.len().cmp(&b.occupancy.starved_cells.len()))
-    });
-    let keep = opts.orientations_per_context.max(1);
-    let passing = all.iter().filter(|c| c.stage != Stage::Occupancy).count();
-    all.truncate(if passing > 0 { keep.min(passing) } else { 1 });
-    for c in all.iter_mut() {
-        if c.stage == Stage::Occupancy {
-            c.input = None; // nothing to diffuse
+    Ok(out)
+}
+
+/// The fit score is a penalty Chamfer distance with this threshold (squared cell
+/// units: 0.1 cell), so that a missing or extra hole, whose points lie 1/6 cell or
+/// more from the other surface, weighs far more than a smooth deformation.
+pub const FIT_TAU: f64 = 0.01;
+
+/// Samples used by the geometric fit score.
+pub const FIT_SAMPLES: usize = 2048;
+
+/// `n` points uniform on the exact boundary of a context's assembly, in grid units,
+/// each with the cell of the voxel it bounds.
+pub fn polycube_samples(ctx: &Context, n: usize) -> Vec<([f64; 3], usize)> {
+    let q = crate::polycube::boundary(&ctx.assemble());
+    if q.quads.is_empty() {
+        return Vec::new();
+    }
+    let mut rng = item_rng(0xf17, ctx.occupancy_mask() as u64);
+    use rand::RngExt;
+    (0..n)
+        .map(|_| {
+            let k = rng.random_range(0..q.quads.len());
+            let f = q.quads[k].map(|i| q.vertices[i as usize]);
+            let v = q.quad_voxel[k].0;
+            let (u, w): (f64, f64) = (rng.random(), rng.random());
+            let p = std::array::from_fn(|a| f[0][a] + u * (f[1][a] - f[0][a]) + w * (f[3][a] - f[0][a]));
+            (p, crate::polycube::cell_index(v[0] / 3, v[1] / 3, v[2] / 3))
+        })
+        .collect()
+}
+
+/// Geometric fit of the input to a context (squared cell units; lower is better): the
+/// input samples are mapped onto the context's box under `rotation` and compared with
+/// the exact polycube surface `target` by a penalty Chamfer distance per cell (each
+/// point's distance to the whole other set, averaged over the points of that cell);
+/// the score is the worst cell's. A missing, extra or misdirected hole in one cell
+/// shows up in full instead of being diluted by the other cells.
+pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)]) -> f64 {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    let Some((frame, dlo, dhi)) = crate::polycube::inference::context_box(ctx) else { return f64::INFINITY };
+    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
+    let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for r in &rotated {
+        for a in 0..3 {
+            lo[a] = lo[a].min(r[a]);
+            hi[a] = hi[a].max(r[a]);
         }
     }
-    Ok(all)
+    let map = crate::polycube::inference::BoxMap { rotation: AxisRotation::IDENTITY, src_lo: lo, src_hi: hi, dst_lo: dlo, dst_hi: dhi };
+    let mapped: Vec<[f64; 3]> = rotated.iter().map(|r| map.forward(*r)).collect();
+    if mapped.is_empty() || target.is_empty() {
+        return f64::INFINITY;
+    }
+    let cells_in: Vec<usize> = mapped.iter().map(|q| crate::polycube::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
+    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| frame.to_grid(*q)).collect();
+    let tgt: Vec<[f64; 3]> = target.iter().map(|t| t.0).collect();
+    let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
+    let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
+    let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
+    let mut sum_in = [0.0f64; NUM_CELLS];
+    let mut n_in = [0usize; NUM_CELLS];
+    for (p, &c) in grid_in.iter().zip(&cells_in) {
+        sum_in[c] += f(t_tg.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
+        n_in[c] += 1;
+    }
+    let mut sum_tg = [0.0f64; NUM_CELLS];
+    let mut n_tg = [0usize; NUM_CELLS];
+    for (p, c) in target {
+        sum_tg[*c] += f(t_in.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
+        n_tg[*c] += 1;
+    }
+    let mut worst: f64 = 0.0;
+    for c in 0..NUM_CELLS {
+        if n_tg[c] == 0 {
+            continue;
+        }
+        let a = if n_in[c] > 0 { sum_in[c] / n_in[c] as f64 } else { f64::INFINITY };
+        worst = worst.max(0.5 * (a + sum_tg[c] / n_tg[c] as f64));
+    }
+    worst
 }
 
 /// Diffuse and verify the candidates that passed the pre-check (batched).
@@ -309,7 +421,7 @@ pub fn diffuse_and_verify(
         let pairs = c.correspondence();
         let fid = pairs.iter().map(|(a, b)| (0..3).map(|j| (a[j] - b[j]).powi(2)).sum::<f64>()).sum::<f64>() / pairs.len().max(1) as f64;
         c.fidelity = Some(fid);
-        c.score = Some(rep.mean_target_pcd + fid);
+        c.score = Some(c.fit + rep.mean_target_pcd);
         c.report = Some(rep);
     }
     timings.verification += t0.elapsed().as_secs_f64();

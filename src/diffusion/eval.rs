@@ -34,12 +34,18 @@ pub struct EvalSummary {
     /// Wrong-context trials and how many were rejected.
     pub wrong_trials: usize,
     pub wrong_rejected: usize,
+    /// Rejections of wrong contexts by the pre-check (occupancy or fit) alone.
+    pub wrong_rejected_precheck: usize,
+    /// Geometric fit of the true context (squared cell units), per case.
+    pub true_fit: Vec<f64>,
+    /// Geometric fit of the wrong context, per trial.
+    pub wrong_fit: Vec<f64>,
     pub seconds: f64,
     pub failures: Vec<String>,
 }
 
 /// A genus-consistent wrong context: one occupied cell's label replaced by another of
-/// the same family genus (cube <-> BHC+Z, THC+Z <-> THC+X, BHC orientations...).
+/// the same genus whose solid is not congruent to the truth's.
 pub fn wrong_context(ctx: &Context, k: u64) -> Option<Context> {
     let g = ctx.validity().genus?;
     let occupied: Vec<usize> = ctx.occupied().collect();
@@ -49,7 +55,7 @@ pub fn wrong_context(ctx: &Context, k: u64) -> Option<Context> {
         let n = occupied[rng.random_range(0..occupied.len())];
         let mut w = *ctx;
         w.labels[n] = Primitive::ALL[rng.random_range(1..=10usize)];
-        if w.labels[n] != ctx.labels[n] && w.validity().genus == Some(g) {
+        if w.labels[n] != ctx.labels[n] && w.validity().genus == Some(g) && !crate::polycube::assembly::congruent(&w.assemble(), &ctx.assemble()) {
             return Some(w);
         }
     }
@@ -67,6 +73,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         let g = ctx.validity().genus.unwrap();
         let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
         let c: &Candidate = &r.candidates[0];
+        s.true_fit.push(c.fit);
         if c.stage != Stage::Occupancy {
             s.precheck_passed += 1;
         }
@@ -99,8 +106,12 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
             if let Some(w) = wrong_context(&ctx, i as u64) {
                 let r = generate_from_contexts(model, &mesh, g, &[w], opts, &mut NoProgress)?;
                 s.wrong_trials += 1;
+                s.wrong_fit.push(r.candidates[0].fit);
                 if r.chosen.is_none() {
                     s.wrong_rejected += 1;
+                }
+                if r.candidates[0].stage == Stage::Occupancy {
+                    s.wrong_rejected_precheck += 1;
                 }
             }
         }

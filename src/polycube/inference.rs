@@ -86,7 +86,7 @@ pub fn context_box(ctx: &Context) -> Option<(BoxFrame, [f64; 3], [f64; 3])> {
 /// Points closer than this (grid units) to an occupied cell are counted in it even
 /// when they fall into an empty neighbour: the polycube's surface lies exactly on
 /// such cell faces, and a mapped input surface sits on or near them.
-pub const CELL_SNAP: f64 = 0.02;
+pub const CELL_SNAP: f64 = 0.15;
 
 /// The cell a point of the model's frame falls into (clamped into the occupied box);
 /// a point within `CELL_SNAP` of an occupied cell goes to that cell rather than to an
@@ -125,6 +125,35 @@ pub fn cell_of(frame: &BoxFrame, lo: [usize; 3], hi: [usize; 3], labels: &[Primi
         }
     }
     best.1
+}
+
+/// Area fractions per cell for a context's occupancy and a rotation, from (a subset
+/// of) the samples: the cheap part of the pre-check, shared by every labelling of the
+/// same occupied cells.
+pub fn occupancy_only(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, min_occupied_fraction: f64) -> Option<Occupancy> {
+    let (frame, dlo, dhi) = context_box(ctx)?;
+    let (glo, ghi) = super::assembly::occupied_cell_box(&ctx.labels)?;
+    let mut slo = [f64::INFINITY; 3];
+    let mut shi = [f64::NEG_INFINITY; 3];
+    let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
+    for r in &rotated {
+        for a in 0..3 {
+            slo[a] = slo[a].min(r[a]);
+            shi[a] = shi[a].max(r[a]);
+        }
+    }
+    let map = BoxMap { rotation: AxisRotation::IDENTITY, src_lo: slo, src_hi: shi, dst_lo: dlo, dst_hi: dhi };
+    let mut count = [0usize; NUM_CELLS];
+    for r in &rotated {
+        count[cell_of(&frame, glo, ghi, &ctx.labels, map.forward(*r))] += 1;
+    }
+    let total = samples.len().max(1) as f64;
+    let area_fraction: [f64; NUM_CELLS] = std::array::from_fn(|n| count[n] as f64 / total);
+    let in_empty_cells = (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null).map(|n| area_fraction[n]).sum();
+    let occupied: Vec<usize> = ctx.occupied().collect();
+    let expected = 1.0 / occupied.len() as f64;
+    let starved_cells = occupied.iter().copied().filter(|&n| area_fraction[n] < min_occupied_fraction * expected).collect();
+    Some(Occupancy { area_fraction, in_empty_cells, starved_cells })
 }
 
 /// Build the inference tensor of one candidate from surface samples of the aligned
