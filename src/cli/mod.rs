@@ -3,6 +3,8 @@
 
 use clap::{Parser, Subcommand};
 
+mod context;
+mod dataset;
 mod evalmodel;
 mod info;
 mod train;
@@ -21,6 +23,10 @@ pub struct Cli {
 pub enum Command {
     /// Read a mesh, print what was measured, exit 2 if it cannot go on to meshing.
     Info(info::InfoArgs),
+    /// Encode a context: one-hot vector, assembled genus, validity and the reason.
+    Context(context::ContextArgs),
+    /// Write the training set (tensors, contexts, a few assemblies as OBJ).
+    Dataset(dataset::DatasetArgs),
     /// Measure a model on held-in synthetic inputs (developer command).
     #[command(name = "eval-model")]
     EvalModel(evalmodel::EvalArgs),
@@ -39,6 +45,8 @@ pub fn run() -> i32 {
     };
     match cli.command {
         Command::Info(args) => info::run(&args),
+        Command::Context(args) => context::run(&args).unwrap_or_else(fail),
+        Command::Dataset(args) => dataset::run(&args).unwrap_or_else(fail),
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }
