@@ -225,6 +225,8 @@ pub struct PreparedInput {
     pub alignment: Alignment,
     pub frame: FrameChoice,
     pub samples: Vec<SurfaceSample>,
+    /// Surface area of the aligned mesh.
+    pub area: f64,
 }
 
 pub fn prepare_input(mesh: &TriMesh, opts: &PolycubeOptions) -> Result<PreparedInput> {
@@ -234,7 +236,8 @@ pub fn prepare_input(mesh: &TriMesh, opts: &PolycubeOptions) -> Result<PreparedI
     if samples.is_empty() {
         return Err(Error::InvalidMesh("the surface has no area to sample".into()));
     }
-    Ok(PreparedInput { alignment, frame, samples })
+    let area = crate::geometry::surface_moments(&alignment.mesh).area;
+    Ok(PreparedInput { alignment, frame, samples, area })
 }
 
 /// Samples used by the cheap pre-check (a prefix of the shared samples).

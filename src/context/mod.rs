@@ -2,7 +2,9 @@
 //! and the expansion of partial constraints (counts + spatial arrangement) into every
 //! valid context that satisfies them.
 
+pub mod auto;
 pub mod generate;
+pub mod volume;
 
 use crate::error::{Error, Result};
 use crate::polycube::assembly::{assemble, check, VoxelGrid, Validity};
