@@ -335,4 +335,4 @@ impl TriIndex for usize {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
