@@ -79,25 +79,42 @@ pub fn self_intersections(mesh: &TriMesh, limit: usize) -> Vec<(u32, u32)> {
 }
 
 /// Whether triangles s and t of the mesh cross (see the module docs).
+/// Orientations at shared corners are known to be zero and are not computed
+/// (exact predicates are slow precisely on exact zeros).
 pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
     let ts = mesh.triangles[s];
     let tt = mesh.triangles[t];
     let p = ts.map(|v| mesh.vertices[v as usize]);
     let q = tt.map(|v| mesh.vertices[v as usize]);
-    let shared: Vec<(usize, usize)> =
-        (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).filter(|&(i, j)| ts[i] == tt[j]).collect();
-    if shared.len() == 3 {
+    // shared corners: in_q[i] = index in t of s's corner i
+    let in_q: [Option<usize>; 3] = ts.map(|v| tt.iter().position(|&w| w == v));
+    let in_p: [Option<usize>; 3] = tt.map(|v| ts.iter().position(|&w| w == v));
+    let mut shared = [(0usize, 0usize); 3];
+    let mut n_shared = 0;
+    for i in 0..3 {
+        if let Some(j) = in_q[i] {
+            shared[n_shared] = (i, j);
+            n_shared += 1;
+        }
+    }
+    let shared = &shared[..n_shared];
+    if n_shared == 3 {
         return true; // the same triangle twice
     }
-    let oq = q.map(|x| sgn(o3(p[0], p[1], p[2], x)));
-    if oq.iter().all(|&o| o > 0) || oq.iter().all(|&o| o < 0) {
-        return false;
+    let oq: [i8; 3] = std::array::from_fn(|j| if in_p[j].is_some() { 0 } else { sgn(o3(p[0], p[1], p[2], q[j])) });
+    let (pos, neg) = signs(&oq, &in_p);
+    if pos == 0 || neg == 0 {
+        if pos + neg > 0 {
+            return false; // t meets s's plane at most in the shared corners
+        }
+        return coplanar_overlap(p, q, shared);
     }
-    if oq.iter().all(|&o| o == 0) {
-        return coplanar_overlap(p, q, &shared);
+    if n_shared == 2 {
+        return false; // sharing an edge and not coplanar
     }
-    let op = p.map(|x| sgn(o3(q[0], q[1], q[2], x)));
-    if op.iter().all(|&o| o > 0) || op.iter().all(|&o| o < 0) {
+    let op: [i8; 3] = std::array::from_fn(|i| if in_q[i].is_some() { 0 } else { sgn(o3(q[0], q[1], q[2], p[i])) });
+    let (pos, neg) = signs(&op, &in_q);
+    if pos == 0 || neg == 0 {
         return false;
     }
     for i in 0..3 {
@@ -110,6 +127,12 @@ pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
         }
     }
     false
+}
+
+/// Counts of strictly positive and negative orientations among unshared corners.
+fn signs(o: &[i8; 3], shared: &[Option<usize>; 3]) -> (usize, usize) {
+    let free = (0..3).filter(|&k| shared[k].is_none());
+    (free.clone().filter(|&k| o[k] > 0).count(), free.filter(|&k| o[k] < 0).count())
 }
 
 /// Segment ab (already known to have its ends strictly on both sides of the
