@@ -91,8 +91,8 @@ pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
     let in_p: [Option<usize>; 3] = tt.map(|v| ts.iter().position(|&w| w == v));
     let mut shared = [(0usize, 0usize); 3];
     let mut n_shared = 0;
-    for i in 0..3 {
-        if let Some(j) = in_q[i] {
+    for (i, q_index) in in_q.iter().enumerate() {
+        if let Some(j) = *q_index {
             shared[n_shared] = (i, j);
             n_shared += 1;
         }
