@@ -2,7 +2,9 @@
 //!
 //! Broad phase: a BVH over the triangles' bounding boxes (geometry::Bvh); every
 //! pair whose boxes overlap goes to the narrow phase, in parallel.
-//! Narrow phase, with Shewchuk's exact orientation predicates (crate `robust`):
+//! Narrow phase: a conservative float filter (the two triangles' projections
+//! along s's normal are separated by an edge line, see `separated_in_projection`),
+//! then Shewchuk's exact orientation predicates (crate `robust`):
 //! - non-coplanar pairs cross when an edge of one passes strictly through the
 //!   other (its ends strictly on both sides of the other's plane and the
 //!   crossing point strictly inside the triangle). Pairs that share a vertex are
@@ -84,8 +86,12 @@ pub fn self_intersections(mesh: &TriMesh, limit: usize) -> Vec<(u32, u32)> {
 pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
     let ts = mesh.triangles[s];
     let tt = mesh.triangles[t];
-    let p = ts.map(|v| mesh.vertices[v as usize]);
-    let q = tt.map(|v| mesh.vertices[v as usize]);
+    cross_pair(ts.map(|v| mesh.vertices[v as usize]), tt.map(|v| mesh.vertices[v as usize]), ts, tt, true)
+}
+
+/// Triangles p (corner ids ts) and q (ids tt) cross; `filter` runs the float
+/// pre-filter first (it never changes the answer, only the cost).
+fn cross_pair(p: [[f64; 3]; 3], q: [[f64; 3]; 3], ts: [u32; 3], tt: [u32; 3], filter: bool) -> bool {
     // shared corners: in_q[i] = index in t of s's corner i
     let in_q: [Option<usize>; 3] = ts.map(|v| tt.iter().position(|&w| w == v));
     let in_p: [Option<usize>; 3] = tt.map(|v| ts.iter().position(|&w| w == v));
@@ -100,6 +106,9 @@ pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
     let shared = &shared[..n_shared];
     if n_shared == 3 {
         return true; // the same triangle twice
+    }
+    if filter && separated_in_projection(p, q, &in_q, &in_p) {
+        return false;
     }
     let oq: [i8; 3] = std::array::from_fn(|j| if in_p[j].is_some() { 0 } else { sgn(o3(p[0], p[1], p[2], q[j])) });
     let (pos, neg) = signs(&oq, &in_p);
@@ -127,6 +136,53 @@ pub(crate) fn triangles_cross(mesh: &TriMesh, s: usize, t: usize) -> bool {
         }
     }
     false
+}
+
+/// Cheap, conservative float filter run before the exact predicates: project
+/// both triangles along the dominant axis of s's normal and look for an edge
+/// line of one that has the other triangle strictly on its far side (beyond a
+/// margin of 1e-10 of the extent), except for shared corners lying exactly on
+/// that edge. The projections then meet at most in shared corners, so the
+/// triangles can only touch there: no crossing.
+fn separated_in_projection(p: [[f64; 3]; 3], q: [[f64; 3]; 3], in_q: &[Option<usize>; 3], in_p: &[Option<usize>; 3]) -> bool {
+    let n = tri_normal(p[0], p[1], p[2]);
+    let (u, v) = if n[0].abs() >= n[1].abs() && n[0].abs() >= n[2].abs() {
+        (1, 2)
+    } else if n[1].abs() >= n[2].abs() {
+        (2, 0)
+    } else {
+        (0, 1)
+    };
+    let a2 = p.map(|x| [x[u], x[v]]);
+    let b2 = q.map(|x| [x[u], x[v]]);
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for x in a2.iter().chain(b2.iter()) {
+        for k in 0..2 {
+            lo[k] = lo[k].min(x[k]);
+            hi[k] = hi[k].max(x[k]);
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    // edges of X against triangle Y; `shared_y[k]` = index in X of Y's corner k
+    let try_edges = |x: &[[f64; 2]; 3], y: &[[f64; 2]; 3], shared_y: &[Option<usize>; 3]| {
+        (0..3).any(|i| {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            let d = [x[i1][0] - x[i][0], x[i1][1] - x[i][1]];
+            let a = [-d[1], d[0]];
+            let side = |w: [f64; 2]| a[0] * (w[0] - x[i][0]) + a[1] * (w[1] - x[i][1]);
+            let margin = 1e-10 * (a[0].abs() + a[1].abs()) * extent;
+            let s3 = side(x[i2]);
+            if s3.abs() <= margin {
+                return false;
+            }
+            (0..3).all(|k| match shared_y[k] {
+                Some(j) => j == i || j == i1,
+                None => side(y[k]) * s3.signum() < -margin,
+            })
+        })
+    };
+    try_edges(&a2, &b2, in_p) || try_edges(&b2, &a2, in_q)
 }
 
 /// Counts of strictly positive and negative orientations among unshared corners.
@@ -209,4 +265,47 @@ fn coplanar_overlap(p: [[f64; 3]; 3], q: [[f64; 3]; 3], shared: &[(usize, usize)
         }
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The float filter never changes the exact answer: random pairs on a
+    /// coarse integer grid (many coplanar, touching and shared-corner cases).
+    #[test]
+    fn filter_agrees_with_exact_predicates() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let pts: Vec<[f64; 3]> = (0..40)
+            .map(|_| [rng.random_range(0..4) as f64, rng.random_range(0..4) as f64, rng.random_range(0..3) as f64 * 0.5])
+            .collect();
+        let (mut crossing, mut filtered) = (0, 0);
+        for _ in 0..200_000 {
+            let ts: [u32; 3] = std::array::from_fn(|_| rng.random_range(0..pts.len() as u32));
+            let mut tt: [u32; 3] = std::array::from_fn(|_| rng.random_range(0..pts.len() as u32));
+            // share corners often
+            for k in 0..3 {
+                if rng.random_range(0..3) == 0 {
+                    tt[k] = ts[rng.random_range(0..3)];
+                }
+            }
+            if ts[0] == ts[1] || ts[1] == ts[2] || ts[0] == ts[2] || tt[0] == tt[1] || tt[1] == tt[2] || tt[0] == tt[2] {
+                continue;
+            }
+            let p = ts.map(|v| pts[v as usize]);
+            let q = tt.map(|v| pts[v as usize]);
+            if norm(tri_normal(p[0], p[1], p[2])) == 0.0 || norm(tri_normal(q[0], q[1], q[2])) == 0.0 {
+                continue;
+            }
+            let exact = cross_pair(p, q, ts, tt, false);
+            assert_eq!(cross_pair(p, q, ts, tt, true), exact, "{ts:?} {tt:?} {p:?} {q:?}");
+            assert_eq!(cross_pair(q, p, tt, ts, true), exact, "symmetry {ts:?} {tt:?}");
+            crossing += exact as usize;
+            let in_q: [Option<usize>; 3] = ts.map(|v| tt.iter().position(|&w| w == v));
+            let in_p: [Option<usize>; 3] = tt.map(|v| ts.iter().position(|&w| w == v));
+            filtered += separated_in_projection(p, q, &in_q, &in_p) as usize;
+        }
+        assert!(crossing > 1000 && filtered > 1000, "crossing {crossing}, filtered {filtered}");
+    }
 }
