@@ -8,6 +8,7 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
+pub mod pipeline;
 pub mod polycube;
 pub mod verify;
 

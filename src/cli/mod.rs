@@ -3,10 +3,12 @@
 
 use clap::{Parser, Subcommand};
 
+mod common;
 mod context;
 mod dataset;
 mod evalmodel;
 mod info;
+mod polycube;
 mod train;
 
 /// Exit code for bad input (DESIGN.md).
@@ -27,6 +29,8 @@ pub enum Command {
     Context(context::ContextArgs),
     /// Write the training set (tensors, contexts, a few assemblies as OBJ).
     Dataset(dataset::DatasetArgs),
+    /// Generate and verify a polycube for a mesh (user-guided or automated).
+    Polycube(polycube::PolycubeArgs),
     /// Measure a model on held-in synthetic inputs (developer command).
     #[command(name = "eval-model")]
     EvalModel(evalmodel::EvalArgs),
@@ -47,6 +51,7 @@ pub fn run() -> i32 {
         Command::Info(args) => info::run(&args),
         Command::Context(args) => context::run(&args).unwrap_or_else(fail),
         Command::Dataset(args) => dataset::run(&args).unwrap_or_else(fail),
+        Command::Polycube(args) => polycube::run(&args).unwrap_or_else(fail),
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }

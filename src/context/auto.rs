@@ -84,11 +84,15 @@ pub struct AutoOptions {
     /// A finer box is preferred only when its fit beats the coarsest acceptable box's
     /// by this factor (default 0.8).
     pub finer_box_factor: f64,
+    /// Boxes tried (best first) before giving up (default 2).
+    pub max_boxes: usize,
+    /// Sampler steps of the local single-cell diffusion (default 25).
+    pub local_steps: usize,
 }
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8 }
+        AutoOptions { resolution: 48, min_fill: 0.04, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25 }
     }
 }
 
@@ -333,46 +337,9 @@ pub fn generate_auto(
     }
     timings.precheck += t0.elapsed().as_secs_f64();
 
-    // Local single-cell diffusion + verification, one batch for every box.
-    if !local_jobs.is_empty() {
-        let mut lc: Vec<Candidate> = Vec::with_capacity(local_jobs.len());
-        for job in &local_jobs {
-            // The local cell sits at its own grid position (all 120 single-cell
-            // configurations are in the training set).
-            let mut l = [Primitive::Null; NUM_CELLS];
-            l[job.cell] = job.label;
-            let ctx = Context::new(l);
-            let one = PreparedInput { alignment: input.alignment.clone(), frame: input.frame, samples: job.samples.clone(), area: input.area };
-            let mut o = opts.clone();
-            o.orientations = OrientationSearch::Identity;
-            o.max_fit = f64::INFINITY;
-            o.max_in_empty_fraction = 1.0;
-            o.min_occupied_fraction = 0.0;
-            lc.extend(precheck(&one, &ctx, &o)?);
-        }
-        let mut sub_progress = |f: f64, s: &str| progress.report(0.3 + 0.3 * f, s);
-        diffuse_and_verify(model, &mut lc, opts, &mut sub_progress, &mut timings)?;
-        for (k, job) in local_jobs.iter().enumerate() {
-            if lc[k].stage == Stage::Verified {
-                report.boxes[job.boxi].locals[job.local].verified.push(job.label.name().to_string());
-            }
-        }
-        // Keep, per box, only global candidates whose every local label passed (when at
-        // least one label of that subregion passed; otherwise the subregion keeps its
-        // best-fit labels and is named if the global stage fails).
-        for (bi, cands) in per_box.iter_mut().enumerate() {
-            let locals = &report.boxes[bi].locals;
-            cands.retain(|(ctx, _)| {
-                locals.iter().all(|l| {
-                    let lab = ctx.labels[l.subregion.cell];
-                    lab == Primitive::Null || l.verified.is_empty() || l.verified.iter().any(|v| v == lab.name())
-                })
-            });
-        }
-    }
-
-    // Global fit of every remaining candidate; choose the box.
-    check_progress(progress, 0.6, "global candidates")?;
+    // Global fit of every candidate (cheap); order the boxes: the coarsest box whose
+    // best fit is not beaten by a finer one by `finer_box_factor`, then the rest by fit.
+    check_progress(progress, 0.3, "global candidates")?;
     let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
     for (bi, cands) in per_box.iter_mut().enumerate() {
         for (ctx, f) in cands.iter_mut() {
@@ -381,24 +348,27 @@ pub fn generate_auto(
         cands.sort_by(|a, b| a.1.total_cmp(&b.1));
         report.boxes[bi].best_fit = cands.first().map(|c| c.1);
     }
-    let best_overall = per_box.iter().filter_map(|c| c.first().map(|x| x.1)).fold(f64::INFINITY, f64::min);
-    // Coarsest box whose fit is within reach of the best; a finer box only if clearly better.
-    let mut chosen: Option<usize> = None;
+    let mut order: Vec<usize> = Vec::new();
     for (bi, cands) in per_box.iter().enumerate() {
         if let Some(&(_, f)) = cands.first() {
-            match chosen {
-                None => chosen = Some(bi),
-                Some(c) => {
-                    let fc = per_box[c][0].1;
-                    if f < aopts.finer_box_factor * fc {
-                        chosen = Some(bi);
+            match order.first() {
+                None => order.push(bi),
+                Some(&c) => {
+                    if f < aopts.finer_box_factor * per_box[c][0].1 {
+                        order.insert(0, bi);
+                    } else {
+                        order.push(bi);
                     }
                 }
             }
         }
     }
-    let _ = best_overall;
-    let Some(cb) = chosen else {
+    if order.len() > 1 {
+        let first = order[0];
+        order[1..].sort_by(|&a, &b| per_box[a][0].1.total_cmp(&per_box[b][0].1));
+        debug_assert_eq!(order[0], first);
+    }
+    if order.is_empty() {
         let mut why: Vec<String> = report.boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
         why.truncate(6);
         return Err(Error::VerificationFailed(format!(
@@ -406,18 +376,65 @@ pub fn generate_auto(
             why.join("; "),
             suggest_ratios(&vol, bb.min, bb.max)
         )));
-    };
-    report.chosen_box = Some(report.boxes[cb].dims);
-    let mut global: Vec<Candidate> = Vec::new();
-    let mut o = opts.clone();
-    o.orientations = OrientationSearch::Identity;
-    for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
-        global.extend(precheck(&input, ctx, &o)?);
     }
-    let mut sub_progress = |f: f64, s: &str| progress.report(0.6 + 0.4 * f, s);
-    diffuse_and_verify(model, &mut global, opts, &mut sub_progress, &mut timings)?;
+    // Try the boxes in that order (at most `max_boxes`) until one yields a verified polycube.
+    let mut all_global: Vec<Candidate> = Vec::new();
+    for (attempt, &cb) in order.iter().take(aopts.max_boxes.max(1)).enumerate() {
+        let span = 0.35 + 0.6 * attempt as f64 / aopts.max_boxes.max(1) as f64;
+        report.chosen_box = Some(report.boxes[cb].dims);
+        // Local single-cell diffusion + verification for this box's kept labels (one batch).
+        let jobs: Vec<&LocalJob> = local_jobs.iter().filter(|j| j.boxi == cb).collect();
+        if !jobs.is_empty() {
+            let mut lc: Vec<Candidate> = Vec::with_capacity(jobs.len());
+            for job in &jobs {
+                // The local cell sits at its own grid position (all 120 single-cell
+                // configurations are in the training set).
+                let mut l = [Primitive::Null; NUM_CELLS];
+                l[job.cell] = job.label;
+                let ctx = Context::new(l);
+                let one = PreparedInput { alignment: input.alignment.clone(), frame: input.frame, samples: job.samples.clone(), area: input.area };
+                let mut o = opts.clone();
+                o.orientations = OrientationSearch::Identity;
+                o.max_fit = f64::INFINITY;
+                o.max_in_empty_fraction = 1.0;
+                o.min_occupied_fraction = 0.0;
+                lc.extend(precheck(&one, &ctx, &o)?);
+            }
+            let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 * f, s);
+            let mut local_opts = opts.clone();
+            local_opts.sampler.steps = aopts.local_steps;
+            diffuse_and_verify(model, &mut lc, &local_opts, &mut sub_progress, &mut timings)?;
+            for (k, job) in jobs.iter().enumerate() {
+                if lc[k].stage == Stage::Verified {
+                    report.boxes[cb].locals[job.local].verified.push(job.label.name().to_string());
+                }
+            }
+            // Keep only global candidates whose local labels passed (a subregion where no
+            // label passed keeps its best-fit labels and is named if the global stage fails).
+            let locals = &report.boxes[cb].locals;
+            per_box[cb].retain(|(ctx, _)| {
+                locals.iter().all(|l| {
+                    let lab = ctx.labels[l.subregion.cell];
+                    lab == Primitive::Null || l.verified.is_empty() || l.verified.iter().any(|v| v == lab.name())
+                })
+            });
+        }
+        let mut global: Vec<Candidate> = Vec::new();
+        let mut o = opts.clone();
+        o.orientations = OrientationSearch::Identity;
+        for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
+            global.extend(precheck(&input, ctx, &o)?);
+        }
+        let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / aopts.max_boxes.max(1) as f64, s);
+        diffuse_and_verify(model, &mut global, opts, &mut sub_progress, &mut timings)?;
+        let done = global.iter().any(|c| c.stage == Stage::Verified);
+        all_global.extend(global);
+        if done {
+            break;
+        }
+    }
     timings.total = t_all.elapsed().as_secs_f64();
-    let result = finish(input, input_genus, "auto", global, timings);
+    let result = finish(input, input_genus, "auto", all_global, timings);
     Ok((result, report))
 }
 
@@ -434,7 +451,10 @@ pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Erro
         .filter(|l| !l.subregion.empty && l.verified.is_empty())
         .map(|l| format!("cell {} (genus {}, best fit {})", l.subregion.cell, l.subregion.genus, l.fits.first().map(|f| f.0.as_str()).unwrap_or("-")))
         .collect();
-    let base = result.accepted().err().map(|e| e.to_string()).unwrap_or_default();
+    let base = match result.accepted() {
+        Err(Error::VerificationFailed(m)) => m,
+        _ => String::new(),
+    };
     Some(Error::VerificationFailed(format!(
         "{base}; box {}x{}x{}: {}; try other splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2) that put each hole in its own cell",
         b.dims[0],

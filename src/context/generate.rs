@@ -193,7 +193,9 @@ impl PolycubeResult {
                 100.0 * c.occupancy.in_empty_cells
             ));
         }
-        s.push_str("; revise the context or use the automated mode (--auto)");
+        if self.source == "user" {
+            s.push_str("; revise the context or use the automated mode (--auto)");
+        }
         s
     }
 }

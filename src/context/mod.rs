@@ -430,3 +430,16 @@ mod tests {
         }
     }
 }
+
+impl Serialize for Context {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(&self.names())
+    }
+}
+
+impl<'de> Deserialize<'de> for Context {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Context::parse(&s).map_err(serde::de::Error::custom)
+    }
+}

@@ -35,11 +35,18 @@ pub struct SamplerOptions {
     pub keep_every: usize,
     /// Candidates per network call.
     pub max_batch: usize,
+    /// The step the reverse process starts from (0 = T). The input geometry enters as
+    /// the x_0 of the forward process at that step: x'_start = sqrt(ab) x_in +
+    /// sqrt(1 - ab) z + Q q, so the network sees the kind of state it was trained on.
+    pub start_step: usize,
+    /// Use the raw input geometry as x'_T without forward noising (DESIGN.md's literal
+    /// reading; measured to be worse, see BENCHMARKS.md).
+    pub raw_start: bool,
 }
 
 impl Default for SamplerOptions {
     fn default() -> Self {
-        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16 }
+        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16, start_step: 0, raw_start: false }
     }
 }
 
@@ -54,7 +61,8 @@ pub struct SampleOutput {
     pub trajectory: Vec<Vec<(usize, Vec<f32>)>>,
 }
 
-/// The timesteps the sampler visits: T, ..., 1 (full) or an evenly strided subset.
+/// The timesteps the sampler visits from `t_max` down: t_max, ..., 1 (full) or an
+/// evenly strided subset of `steps` of them.
 pub fn timesteps(t_max: usize, steps: usize) -> Vec<usize> {
     if steps == 0 || steps >= t_max {
         return (1..=t_max).rev().collect();
@@ -91,8 +99,9 @@ pub fn reverse_diffusion(
     let n = inputs.len();
     let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;
-    let ts = timesteps(sched.steps(), opts.steps);
-    let ancestral = ts.len() == sched.steps();
+    let t_start = if opts.start_step == 0 { sched.steps() } else { opts.start_step.min(sched.steps()) };
+    let ts = timesteps(t_start, opts.steps);
+    let ancestral = ts.len() == t_start;
     let batch = opts.max_batch.max(1);
     let total_calls = n.div_ceil(batch) * ts.len();
     let mut calls = 0usize;
@@ -101,11 +110,22 @@ pub fn reverse_diffusion(
         let b = end - start;
         let mut x: Vec<f32> = inputs[start..end].concat();
         let mut rngs: Vec<_> = (start..end).map(|i| item_rng(opts.seed, i as u64)).collect();
+        if !opts.raw_start {
+            let mut z = vec![0f32; TENSOR_LEN];
+            for i in 0..b {
+                for v in z.iter_mut() {
+                    *v = StandardNormal.sample(&mut rngs[i]);
+                }
+                let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;
+                let x_in = x[r.clone()].to_vec();
+                sched.forward_sample(&x_in, &z, t_start, &mut x[r]);
+            }
+        }
         let ctx: Vec<f32> = contexts[start..end].iter().flat_map(|c| c.one_hot()).collect();
         let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &model.device);
         if opts.keep_every > 0 {
             for i in 0..b {
-                out.trajectory[start + i].push((sched.steps(), x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                out.trajectory[start + i].push((t_start, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
             }
         }
         let mut next = vec![0f32; x.len()];

