@@ -61,9 +61,61 @@ typedef int32_t sddpm_status;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
+// The primitive categories, in the fixed label order of DESIGN.md.
+enum Primitive
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint8_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  PRIMITIVE_NULL = 0,
+  PRIMITIVE_CUBE = 1,
+  PRIMITIVE_THC_Z = 2,
+  PRIMITIVE_THC_X = 3,
+  PRIMITIVE_THC_Y = 4,
+  PRIMITIVE_BHC_PZ = 5,
+  PRIMITIVE_BHC_MZ = 6,
+  PRIMITIVE_BHC_PX = 7,
+  PRIMITIVE_BHC_MX = 8,
+  PRIMITIVE_BHC_PY = 9,
+  PRIMITIVE_BHC_MY = 10,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum Primitive Primitive;
+#else
+typedef uint8_t Primitive;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+// A rotation as a signed permutation: new axis `a` = sign[a] * old axis perm[a].
+typedef struct AxisRotation AxisRotation;
+
+// An opaque stack of contexts (release with sddpm_context_free).
+typedef struct sddpm_context sddpm_context;
+
 // An opaque mesh handle (create with sddpm_mesh_load or
 // sddpm_mesh_new_from_arrays, release with sddpm_mesh_free).
 typedef struct sddpm_mesh sddpm_mesh;
+
+// An opaque diffusion model (immutable once loaded: one handle may be used by
+// several threads at once).
+typedef struct sddpm_model sddpm_model;
+
+// The result of polycube generation (release with sddpm_polycube_free).
+typedef struct sddpm_polycube sddpm_polycube;
+
+// Partial constraints: counts per family (-1 = free), optional exact counts per
+// label (index = label 0..10, -1 = free; entry 0 is ignored), the cells that may be
+// occupied and those that must be (bit n = cell n), and a genus filter (-1 = none).
+typedef struct sddpm_constraints {
+  int32_t cube;
+  int32_t thc;
+  int32_t bhc;
+  int32_t per_label[11];
+  uint16_t allowed_mask;
+  uint16_t required_mask;
+  int64_t genus;
+} sddpm_constraints;
 
 // How a mesh is read; fill with sddpm_load_options_default, then change fields.
 typedef struct sddpm_load_options {
@@ -108,10 +160,54 @@ typedef struct sddpm_mesh_report {
   double bbox_diagonal;
 } sddpm_mesh_report;
 
+// What a model is.
+typedef struct sddpm_model_info {
+  size_t parameters;
+  size_t base_width;
+  size_t diffusion_steps;
+  size_t trained_epochs;
+  uint64_t training_seed;
+  double final_loss;
+} sddpm_model_info;
+
+// Options of polycube generation; fill with sddpm_polycube_options_default.
+typedef struct sddpm_polycube_options {
+  // Seed of sampling and diffusion (default 0).
+  uint64_t seed;
+  // Reverse-diffusion steps: 0 = the full T-step sampler, n = strided (default: library default).
+  uint32_t sampler_steps;
+  // 0 = frame as aligned, 1 = also its sign flips, 2 = all 24 grid rotations (default 2).
+  uint32_t orientations;
+  // TCV threshold tau_CD, squared cell units (default 0.01).
+  double tau_cd;
+  // Occupancy pre-check: most surface allowed in empty cells (default 0.03).
+  double max_in_empty_fraction;
+  // Geometric pre-check: largest fit score diffused (default 0.05).
+  double max_fit;
+  // Automated mode: voxels along the longest edge of the temporary volume (default 48).
+  uint32_t auto_resolution;
+} sddpm_polycube_options;
+
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short
 // NUL-terminated name valid during the call, `user_data` as given by the
 // caller. Return nonzero to cancel (the call then returns SDDPM_STATUS_CANCELLED).
 typedef int (*sddpm_progress_cb)(double fraction, const char *stage, void *user_data);
+
+// What the verification measured for one candidate.
+typedef struct sddpm_candidate_report {
+  int32_t labels[12];
+  // 0 pending, 1 refused by the occupancy / fit pre-check, 2 failed GOCC, 3 failed TCV, 4 verified.
+  int32_t stage;
+  // Surface fraction in cells the context leaves empty.
+  double in_empty_fraction;
+  // Geometric fit to the exact polycube (squared cell units).
+  double fit;
+  // Mean PCD to the target templates over active cells (NaN if not diffused).
+  double mean_target_pcd;
+  // Ranking score, lower is better (NaN if not diffused).
+  double score;
+  bool chosen;
+} sddpm_candidate_report;
 
 #ifdef __cplusplus
 extern "C" {
@@ -145,6 +241,96 @@ sddpm_status sddpm_last_error_message(char *buf, size_t len, size_t *needed);
 
 // Forget the last error of this thread.
 void sddpm_last_error_clear(void);
+
+// Fill `out` with unconstrained constraints (all counts free, every cell allowed).
+//
+// # Safety
+// `out` must point to one writable struct.
+sddpm_status sddpm_constraints_default(struct sddpm_constraints *out);
+
+// Contexts from `count` integer labels (a multiple of 12, cell-index order; each 0..10).
+//
+// # Safety
+// `labels` points to `count` values; `out` to a writable handle pointer.
+sddpm_status sddpm_context_new_from_labels(const int32_t *labels,
+                                           size_t count,
+                                           struct sddpm_context **out);
+
+// Contexts from a comma-separated label string ("cube,THC+Z,0,..."), several separated by ';'.
+//
+// # Safety
+// `text` a NUL-terminated string; `out` a writable handle pointer.
+sddpm_status sddpm_context_new_from_string(const char *text, struct sddpm_context **out);
+
+// Contexts from `len` floats: n stacked 132-vectors (12 cells x 11 states, one-hot
+// per cell). A non-one-hot cell is refused with a message naming it.
+//
+// # Safety
+// `v` points to `len` floats; `out` a writable handle pointer.
+sddpm_status sddpm_context_new_from_one_hot(const float *v, size_t len, struct sddpm_context **out);
+
+// Every valid context satisfying the constraints (sorted, deduplicated).
+// INVALID_CONTEXT when none does.
+//
+// # Safety
+// `c` points to one struct; `out` a writable handle pointer.
+sddpm_status sddpm_context_new_from_constraints(const struct sddpm_constraints *c,
+                                                struct sddpm_context **out);
+
+// Release a context handle (NULL is a no-op).
+//
+// # Safety
+// `c` NULL or a handle from a sddpm_context_new_* call, not used afterwards.
+void sddpm_context_free(struct sddpm_context *c);
+
+// Number of contexts in the stack.
+//
+// # Safety
+// `c` a valid handle; `out` writable.
+sddpm_status sddpm_context_count(const struct sddpm_context *c, size_t *out);
+
+// Copy the 12 labels of context `index` into `labels` (capacity >= 12).
+//
+// # Safety
+// `c` a valid handle; `labels` points to `capacity` writable ints.
+sddpm_status sddpm_context_get_labels(const struct sddpm_context *c,
+                                      size_t index,
+                                      int32_t *labels,
+                                      size_t capacity);
+
+// Copy the 132-d one-hot vector of context `index` into `v` (capacity >= 132).
+//
+// # Safety
+// `c` a valid handle; `v` points to `capacity` writable floats.
+sddpm_status sddpm_context_get_one_hot(const struct sddpm_context *c,
+                                       size_t index,
+                                       float *v,
+                                       size_t capacity);
+
+// Genus of the assembled solid of context `index`; INVALID_CONTEXT (with the
+// reason as the message) when the assembly is not a valid solid.
+//
+// # Safety
+// `c` a valid handle; `genus` writable.
+sddpm_status sddpm_context_genus(const struct sddpm_context *c, size_t index, int64_t *genus);
+
+// Validity of context `index`: `valid` receives whether the assembly is one
+// face-connected manifold solid without sealed cavity; when it is not, the
+// reason is copied (NUL-terminated, truncated to fit) into `reason` if not NULL.
+//
+// # Safety
+// `c` a valid handle; `valid` writable; `reason` NULL or `reason_len` writable bytes.
+sddpm_status sddpm_context_validity(const struct sddpm_context *c,
+                                    size_t index,
+                                    char *reason,
+                                    size_t reason_len,
+                                    bool *valid);
+
+// Write the assembled surface of context `index` (grid units, one cell = 1) as OBJ.
+//
+// # Safety
+// `c` a valid handle; `path` a NUL-terminated path.
+sddpm_status sddpm_context_write_obj(const struct sddpm_context *c, size_t index, const char *path);
 
 // Fill `out` with the default load options.
 //
@@ -227,6 +413,123 @@ sddpm_status sddpm_mesh_copy_vertices(const struct sddpm_mesh *mesh, double *xyz
 sddpm_status sddpm_mesh_copy_triangles(const struct sddpm_mesh *mesh,
                                        uint32_t *tri,
                                        size_t capacity);
+
+// The model embedded in the library (trained by `sddpm train`, seed 42).
+//
+// # Safety
+// `out` a writable handle pointer.
+sddpm_status sddpm_model_new_default(struct sddpm_model **out);
+
+// A model from a weights file written by `sddpm train`.
+//
+// # Safety
+// `path` NUL-terminated; `out` a writable handle pointer.
+sddpm_status sddpm_model_new_from_file(const char *path, struct sddpm_model **out);
+
+// A model from the bytes of a weights file (copied; the caller keeps its buffer).
+//
+// # Safety
+// `bytes` points to `len` readable bytes; `out` a writable handle pointer.
+sddpm_status sddpm_model_new_from_bytes(const uint8_t *bytes, size_t len, struct sddpm_model **out);
+
+// Release a model (NULL is a no-op).
+//
+// # Safety
+// `m` NULL or a model handle not used afterwards.
+void sddpm_model_free(struct sddpm_model *m);
+
+// Describe a model.
+//
+// # Safety
+// `m` a valid handle; `out` writable.
+sddpm_status sddpm_model_info(const struct sddpm_model *m, struct sddpm_model_info *out);
+
+// Fill `out` with the default polycube options.
+//
+// # Safety
+// `out` writable.
+sddpm_status sddpm_polycube_options_default(struct sddpm_polycube_options *out);
+
+// Generate polycube candidates for `mesh` and verify them. The request is, in
+// order of precedence: `contexts` (complete contexts; a context whose genus differs
+// from the mesh's is refused with GENUS_MISMATCH before any diffusion),
+// `constraints` (expanded to every valid context of the mesh's genus), `ratios`
+// (7 doubles X1,X2,X3,Y1,Y2,Z1,Z2: the automated mode on the full grid with these
+// splitting ratios), or the automated mode over every occupied box when all three
+// are NULL. Returns OK whenever the search ran, even when no candidate passed:
+// check sddpm_polycube_status, which returns VERIFICATION_FAILED with the reason.
+//
+// # Safety
+// `model`, `mesh` valid handles; `contexts`, `constraints`, `ratios`, `options`
+// NULL or valid; `progress` NULL or a valid callback; `out` writable.
+sddpm_status sddpm_generate_polycube(const struct sddpm_model *model,
+                                     const struct sddpm_mesh *mesh,
+                                     const struct sddpm_context *contexts,
+                                     const struct sddpm_constraints *constraints,
+                                     const double *ratios,
+                                     const struct sddpm_polycube_options *options_,
+                                     sddpm_progress_cb progress,
+                                     void *user_data,
+                                     struct sddpm_polycube **out);
+
+// Release a polycube result (NULL is a no-op).
+//
+// # Safety
+// `p` NULL or a handle from sddpm_generate_polycube, not used afterwards.
+void sddpm_polycube_free(struct sddpm_polycube *p);
+
+// OK when a candidate was accepted; VERIFICATION_FAILED (message: which
+// candidates failed where, and what to try) otherwise.
+//
+// # Safety
+// `p` a valid handle.
+sddpm_status sddpm_polycube_status(const struct sddpm_polycube *p);
+
+// The accepted polycube's 12 labels (capacity >= 12).
+//
+// # Safety
+// `p` a valid handle; `labels` points to `capacity` writable ints.
+sddpm_status sddpm_polycube_labels(const struct sddpm_polycube *p,
+                                   int32_t *labels,
+                                   size_t capacity);
+
+// Number of candidates.
+//
+// # Safety
+// `p` a valid handle; `out` writable.
+sddpm_status sddpm_polycube_candidate_count(const struct sddpm_polycube *p, size_t *out);
+
+// The report of candidate `index`.
+//
+// # Safety
+// `p` a valid handle; `out` writable.
+sddpm_status sddpm_polycube_candidate(const struct sddpm_polycube *p,
+                                      size_t index,
+                                      struct sddpm_candidate_report *out);
+
+// The full report (every candidate with its per-cell verification, the automated
+// mode's subregions, timings) as JSON, NUL-terminated, into `buf`; `needed` (may be
+// NULL) receives the size including the NUL. BUFFER_TOO_SMALL when it does not fit.
+//
+// # Safety
+// `p` a valid handle; `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+sddpm_status sddpm_polycube_report_json(const struct sddpm_polycube *p,
+                                        char *buf,
+                                        size_t len,
+                                        size_t *needed);
+
+// The accepted candidate's diffusion output and its correspondence, in the user's
+// coordinates: `points` receives 6144 x 3 doubles (the output point of each tensor
+// slot, cell by cell, 512 per cell; null cells hold the images of (0,0,0)) and
+// `inputs` (may be NULL) the input surface point each slot started from (NaN for
+// null cells). Capacities in doubles; BUFFER_TOO_SMALL below 18432.
+//
+// # Safety
+// `p` a valid handle; `points` `capacity` writable doubles; `inputs` NULL or the same.
+sddpm_status sddpm_polycube_copy_points(const struct sddpm_polycube *p,
+                                        double *points,
+                                        double *inputs,
+                                        size_t capacity);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -13,8 +13,12 @@ use std::cell::RefCell;
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::sync::OnceLock;
 
+mod context;
 mod mesh;
+mod model;
+pub use context::*;
 pub use mesh::*;
+pub use model::*;
 
 /// Version of the C ABI: bumped whenever a declaration in include/sddpm.h changes incompatibly.
 pub const ABI_VERSION: u32 = 1;
