@@ -442,7 +442,7 @@ void sddpm_model_free(struct sddpm_model *m);
 //
 // # Safety
 // `m` a valid handle; `out` writable.
-sddpm_status sddpm_model_info(const struct sddpm_model *m, struct sddpm_model_info *out);
+sddpm_status sddpm_model_get_info(const struct sddpm_model *m, struct sddpm_model_info *out);
 
 // Fill `out` with the default polycube options.
 //

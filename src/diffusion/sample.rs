@@ -51,7 +51,7 @@ impl Default for SamplerOptions {
 }
 
 /// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
-pub const DEFAULT_STEPS: usize = 0;
+pub const DEFAULT_STEPS: usize = 50;
 
 /// Output of a batch: one [3, 64, 96] tensor per candidate, and the kept states.
 #[derive(Debug, Clone, Default)]

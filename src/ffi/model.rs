@@ -98,7 +98,7 @@ pub unsafe extern "C" fn sddpm_model_free(m: *mut SddpmModel) {
 /// # Safety
 /// `m` a valid handle; `out` writable.
 #[no_mangle]
-pub unsafe extern "C" fn sddpm_model_info(m: *const SddpmModel, out: *mut SddpmModelInfo) -> Status {
+pub unsafe extern "C" fn sddpm_model_get_info(m: *const SddpmModel, out: *mut SddpmModelInfo) -> Status {
     ffi_boundary! {
         let m = model_ref(m)?;
         non_null(out, "out")?;
