@@ -13,3 +13,4 @@ pub mod polycube;
 pub use error::{Error, Result, Status};
 pub mod export;
 pub mod hex;
+pub mod spline;
