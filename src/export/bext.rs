@@ -201,7 +201,7 @@ pub fn parse_bext(text: &str) -> std::result::Result<Bext, String> {
         if t.next() != Some("gnode") {
             return Err(format!("line {}: expected gnode {} of {node_n}", ls.line, i + 1));
         }
-        let mut p = [0.0; 4];
+        let mut p = [0.0f64; 4];
         for (c, slot) in p.iter_mut().enumerate() {
             *slot = num(t.next(), ["x", "y", "z", "w"][c], ls.line)?;
             if !slot.is_finite() {

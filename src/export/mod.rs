@@ -1,3 +1,6 @@
 //! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
 
 pub mod vtk;
+pub mod bext;
+pub mod lsdyna;
+pub mod spline_vtk;

@@ -37,7 +37,7 @@ pub use refine::{RefineOptions, RefineReport};
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SplineOptions {
     /// A boundary edge is sharp when the normals of its two boundary quads
-    /// differ by more than this angle, in degrees (default 35). Sharp edges get
+    /// differ by more than this angle, in degrees (default 60). Sharp edges get
     /// the curve rule (C0 across them, the edge curve follows its vertices) and
     /// vertices where three or more sharp edges meet, or where a sharp curve turns
     /// by more than this angle, are interpolated. `None` turns detection off.
@@ -52,6 +52,18 @@ pub struct SplineOptions {
     /// derivative at the boundary; with it the approximation order is the full
     /// tricubic one near the boundary, at the cost of more basis functions.
     pub boundary_enrichment: bool,
+    /// Choose the control points of the vertex functions so that the spline
+    /// passes through every control-mesh vertex (the corner Bézier point of each
+    /// vertex equals the vertex; one sparse LU solve). Default false: on
+    /// HexGen's joint it creates more inverted Gauss points than it removes
+    /// (ringing across graded layers; see BENCHMARKS.md). With false the control
+    /// points are the hex vertices.
+    pub interpolate_vertices: bool,
+    /// Repair elements whose Jacobian is not positive at some 3x3x3 Gauss point:
+    /// their 64 Bézier nodes become Bernstein functions placed on the control-mesh
+    /// element's trilinear map (C0 there), repeated while neighbours go bad
+    /// (default true). The spline is then valid wherever the hex mesh is.
+    pub repair_jacobian: bool,
     /// Fit the spline boundary to the surface given to `build_spline` (default
     /// true; nothing happens without a surface).
     pub fit: FitOptions,
@@ -66,9 +78,11 @@ pub struct SplineOptions {
 impl Default for SplineOptions {
     fn default() -> Self {
         SplineOptions {
-            sharp_angle_deg: Some(35.0),
+            sharp_angle_deg: Some(60.0),
             sharp_edges: Vec::new(),
             boundary_enrichment: false,
+            interpolate_vertices: false,
+            repair_jacobian: true,
             fit: FitOptions::default(),
             refine: None,
             sparse_bext: false,
@@ -231,6 +245,9 @@ pub struct SplineReport {
     pub fitting_after: Option<SurfaceDistance>,
     /// Elements refined automatically.
     pub refined_elements: usize,
+    /// Elements replaced by their trilinear control-mesh map because the
+    /// spline's Jacobian was not positive there (`SplineOptions::repair_jacobian`).
+    pub repaired_elements: usize,
     pub seconds: SplineSeconds,
 }
 
@@ -338,11 +355,71 @@ impl Spline {
             report: SplineReport::default(),
             opts: opts.clone(),
         };
+        if opts.interpolate_vertices {
+            sp.interpolate_vertices()?;
+        }
         if opts.boundary_enrichment {
             refine::enrich_boundary(&mut sp);
         }
+        if opts.repair_jacobian {
+            sp.report.repaired_elements = refine::repair_jacobian(&mut sp);
+        }
         sp.update_report();
         Ok(sp)
+    }
+
+    /// Solve for the vertex control points so that each control-mesh vertex is
+    /// the spline's value at that vertex (level-0 spline, before enrichment).
+    fn interpolate_vertices(&mut self) -> Result<()> {
+        use faer::linalg::solvers::Solve;
+        use faer::sparse::{SparseColMat, Triplet};
+        let n = self.ctrl.len();
+        let mut row_of = vec![u32::MAX; n];
+        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        let mut rhs = faer::Mat::<f64>::zeros(n, 3);
+        for el in &self.elems {
+            let corners = self.topo.elements[el.root as usize];
+            for (c, &v) in corners.iter().enumerate() {
+                // basis id of vertex v
+                let Some(bi) = el.basis.iter().position(|&b| self.kinds[b as usize] == BasisKind::Vertex(v)) else {
+                    continue;
+                };
+                let row = el.basis[bi] as usize;
+                if row_of[row] != u32::MAX {
+                    continue;
+                }
+                row_of[row] = 1;
+                let bits = topology::BITS_OF_VTK[c];
+                let k = bernstein::bidx(3 * bits[0], 3 * bits[1], 3 * bits[2]);
+                for r in 0..el.op.rows() {
+                    let (cols, vals) = el.op.row(r);
+                    if let Some(p) = cols.iter().position(|&x| x as usize == k) {
+                        trip.push(Triplet::new(row, el.basis[r] as usize, vals[p]));
+                    }
+                }
+                let x = self.root_nodes[v as usize];
+                for j in 0..3 {
+                    rhs[(row, j)] = x[j];
+                }
+            }
+        }
+        if row_of.iter().any(|&r| r == u32::MAX) {
+            return Err(Error::SplineFailed("interpolation: a vertex function has no corner".into()));
+        }
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+            .map_err(|e| Error::SplineFailed(format!("interpolation matrix: {e:?}")))?;
+        let lu = a.sp_lu().map_err(|e| Error::SplineFailed(format!("interpolation factorisation: {e:?}")))?;
+        lu.solve_in_place(rhs.as_mut());
+        let mut pts = Vec::with_capacity(n);
+        for i in 0..n {
+            let p = [rhs[(i, 0)], rhs[(i, 1)], rhs[(i, 2)]];
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(Error::SplineFailed("interpolation produced non-finite control points".into()));
+            }
+            pts.push(p);
+        }
+        self.ctrl = pts;
+        Ok(())
     }
 
     pub fn num_elements(&self) -> usize {

@@ -176,6 +176,65 @@ fn include_nodes(sp: &mut Spline, candidates: &[(u32, usize)]) {
     sp.compact();
 }
 
+/// Root-parameter position (in [0,1]^3) of node n of a leaf.
+fn root_param(el: &Element, n: usize) -> [f64; 3] {
+    el.node_pos(n).map(|x| x as f64 / nodes::R as f64)
+}
+
+/// Trilinear map of a root (control-mesh) element.
+fn trilinear(sp: &Spline, root: u32, p: [f64; 3]) -> [f64; 3] {
+    let el = &sp.topo.elements[root as usize];
+    let mut x = [0.0; 3];
+    for (c, &v) in el.iter().enumerate() {
+        let b = super::topology::BITS_OF_VTK[c];
+        let mut w = 1.0;
+        for d in 0..3 {
+            w *= if b[d] == 1 { p[d] } else { 1.0 - p[d] };
+        }
+        let q = sp.root_nodes[v as usize];
+        for i in 0..3 {
+            x[i] += w * q[i];
+        }
+    }
+    x
+}
+
+/// Replace non-positive-Jacobian leaves by the trilinear map of their root
+/// element (see `SplineOptions::repair_jacobian`); returns the number of leaves
+/// repaired. Stops after 50 rounds or when nothing changes.
+pub(super) fn repair_jacobian(sp: &mut Spline) -> usize {
+    let mut repaired: HashSet<usize> = HashSet::new();
+    for _round in 0..50 {
+        let q = super::check::gauss_jacobians(sp, 3);
+        let bad: Vec<usize> = (0..sp.elems.len())
+            .filter(|&e| q.per_element[e] <= 0.0 && !repaired.contains(&e))
+            .collect();
+        if bad.is_empty() {
+            break;
+        }
+        let cand: Vec<(u32, usize)> = bad.iter().flat_map(|&e| (0..NB).map(move |n| (e as u32, n))).collect();
+        include_nodes(sp, &cand);
+        // place the Bernstein functions of these nodes on the trilinear map
+        let mut by_key: HashMap<(u8, NodeKey), usize> = HashMap::new();
+        for (i, k) in sp.kinds.iter().enumerate() {
+            if let BasisKind::Bernstein { level, key } = k {
+                by_key.insert((*level, *key), i);
+            }
+        }
+        for &e in &bad {
+            let el = sp.elems[e].clone();
+            for n in 0..NB {
+                let key = nodes::key_of(&sp.topo, el.root, el.node_pos(n));
+                if let Some(&f) = by_key.get(&(el.level, key)) {
+                    sp.ctrl[f] = trilinear(sp, el.root, root_param(&el, n));
+                }
+            }
+            repaired.insert(e);
+        }
+    }
+    repaired.len()
+}
+
 /// Level-0 Bernstein enrichment of the two Bézier layers next to each boundary face.
 pub(super) fn enrich_boundary(sp: &mut Spline) {
     let mut cand = Vec::new();
