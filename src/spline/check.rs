@@ -60,6 +60,11 @@ pub fn min_det_of(sp: &Spline, elems: &[usize], n: usize) -> f64 {
     elems.par_iter().map(|&e| element_gauss(sp, e, n).0).reduce(|| f64::INFINITY, f64::min)
 }
 
+/// Minimum scaled Jacobian over the Gauss points of the listed elements.
+pub fn min_scaled_of(sp: &Spline, elems: &[usize], n: usize) -> f64 {
+    elems.par_iter().map(|&e| element_gauss(sp, e, n).1).reduce(|| f64::INFINITY, f64::min)
+}
+
 /// Partition of unity and non-negativity at random points of every element.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct UnityStats {

@@ -7,8 +7,9 @@
 //!   min sum_s |X(s) - T(s)|^2 + lambda sum_i |P_i - P_i^0|^2,
 //! lambda = `regularization` x the mean diagonal of the normal matrix, by a
 //! sparse Cholesky factorisation (faer), a few times with new targets. If a fit
-//! step would make the Jacobian non-positive somewhere it was positive, the
-//! step is halved until it does not.
+//! step would lower the minimum scaled Jacobian (3x3x3 Gauss points) of the
+//! elements it touches below half its value before the fit (or below 0.1 when
+//! that is lower), the step is halved until it does not.
 
 use super::bernstein::{self, NB};
 use super::{apply_rows, check, Spline};
@@ -257,7 +258,10 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
     let touched: Vec<usize> = (0..sp.elems.len())
         .filter(|&e| sp.elems[e].basis.iter().any(|&b| local[b as usize] != u32::MAX))
         .collect();
-    let before = check::min_det_of(sp, &touched, 3);
+    // quality floor: the fit may lower the minimum scaled Jacobian of the
+    // touched elements to half its value (at most to 0.1), never below
+    let before = check::min_scaled_of(sp, &touched, 3);
+    let floor = if before > 0.0 { (0.5 * before).min(0.1) } else { before };
     for _ in 0..fo.iterations {
         let p0: Vec<[f64; 3]> = unknowns.iter().map(|&i| sp.ctrl[i as usize]).collect();
         // targets
@@ -296,8 +300,8 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
                 let p = p0[l];
                 sp.ctrl[i as usize] = [0, 1, 2].map(|j| p[j] + alpha * (rhs[(l, j)] - p[j]));
             }
-            let after = check::min_det_of(sp, &touched, 3);
-            if after > 0.0 || after >= before {
+            let after = check::min_scaled_of(sp, &touched, 3);
+            if after >= floor {
                 accepted = true;
                 break;
             }

@@ -37,7 +37,7 @@ pub struct RefineOptions {
     /// surface's bounding-box diagonal, are candidates (default 0.002).
     pub tolerance: f64,
     /// At most this fraction of the boundary elements is refined per pass, the
-    /// farthest first (default 0.25).
+    /// farthest first (default 0.1).
     pub fraction: f64,
     /// Deepest level produced (default 3, at most 10).
     pub max_level: u8,
@@ -45,7 +45,7 @@ pub struct RefineOptions {
 
 impl Default for RefineOptions {
     fn default() -> Self {
-        RefineOptions { passes: 2, tolerance: 0.002, fraction: 0.25, max_level: 3 }
+        RefineOptions { passes: 2, tolerance: 0.002, fraction: 0.1, max_level: 3 }
     }
 }
 
@@ -251,8 +251,22 @@ pub(super) fn enrich_boundary(sp: &mut Spline) {
     include_nodes(sp, &cand);
 }
 
+/// Which Bézier nodes of the children become basis functions of the new level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum NodeFilter {
+    /// All includable nodes: the full tricubic C0 space on the refined region.
+    All,
+    /// Only nodes within the two Bézier layers next to a boundary face of the
+    /// child: refines the boundary geometry (for fitting) at a fraction of the cost.
+    BoundaryLayers,
+}
+
 /// Split the given leaves (no report update).
 pub(super) fn refine_elements(sp: &mut Spline, ids: &[usize]) -> Result<usize> {
+    refine_elements_with(sp, ids, NodeFilter::All)
+}
+
+pub(super) fn refine_elements_with(sp: &mut Spline, ids: &[usize], filter: NodeFilter) -> Result<usize> {
     let mut list: Vec<usize> = ids.to_vec();
     list.sort_unstable();
     list.dedup();
@@ -292,8 +306,31 @@ pub(super) fn refine_elements(sp: &mut Spline, ids: &[usize]) -> Result<usize> {
             child_slots.push(slot);
         }
         for s in child_slots {
-            for n in 0..NB {
-                candidates.push((s as u32, n));
+            match filter {
+                NodeFilter::All => {
+                    for n in 0..NB {
+                        candidates.push((s as u32, n));
+                    }
+                }
+                NodeFilter::BoundaryLayers => {
+                    let el = &sp.elems[s];
+                    let last = (1u32 << el.level) - 1;
+                    for d in 0..3 {
+                        for side in 0..2 {
+                            let touches = if side == 0 { el.origin[d] == 0 } else { el.origin[d] == last };
+                            let f = sp.topo.elem_faces[el.root as usize][d * 2 + side];
+                            if !touches || sp.topo.face_bquad[f as usize] == u32::MAX {
+                                continue;
+                            }
+                            for n in 0..NB {
+                                let i = bernstein::bijk(n)[d];
+                                if (side == 0 && i <= 1) || (side == 1 && i >= 2) {
+                                    candidates.push((s as u32, n));
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }
@@ -341,7 +378,7 @@ pub(super) fn refine_auto_with(
         cand.sort_by(|a, b| b.1.total_cmp(&a.1));
         let k = ((nb as f64 * ro.fraction).ceil() as usize).max(1).min(cand.len());
         let ids: Vec<usize> = cand[..k].iter().map(|c| c.0).collect();
-        rep.refined += refine_elements(sp, &ids)?;
+        rep.refined += refine_elements_with(sp, &ids, NodeFilter::BoundaryLayers)?;
         if fo.enabled {
             fit::fit_boundary_with(sp, loc, fo)?;
         }
