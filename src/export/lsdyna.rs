@@ -76,24 +76,36 @@ pub fn i10(v: i64) -> Result<String> {
     Ok(format!("{s:>10}"))
 }
 
-/// A real right-aligned in a 10-character field, with as many digits as fit.
+/// A real right-aligned in a 10-character field, with as many digits as fit in
+/// 9 characters (one blank always separates it from the previous field).
 pub fn f10(v: f64) -> Result<String> {
     if !v.is_finite() {
         return Err(Error::InvalidArgument(format!("{v} is not a finite number")));
     }
     let plain = format!("{v}");
-    let s = if plain.len() <= 10 && (v == 0.0 || v.abs() >= 1e-3) {
+    let s = if plain.len() <= 8 && (v == 0.0 || v.abs() >= 1e-3) {
         if plain.contains('.') || plain.contains('e') {
             plain
         } else {
             format!("{plain}.")
         }
+    } else if (1e-3..1e8).contains(&v.abs()) {
+        // fixed point with as many decimals as fit in 9 characters
+        let mut out = format!("{v:.0}.");
+        for prec in (1..=8).rev() {
+            let t = format!("{:.*}", prec, v);
+            if t.len() <= 9 {
+                out = t.trim_end_matches('0').to_string();
+                break;
+            }
+        }
+        out
     } else {
         // scientific with the most mantissa digits that fit
         let mut out = None;
         for prec in (0..=6).rev() {
             let t = format!("{:.*E}", prec, v);
-            if t.len() <= 10 {
+            if t.len() <= 9 {
                 out = Some(t);
                 break;
             }
