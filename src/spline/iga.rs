@@ -183,14 +183,14 @@ fn solve_spd(
     if n == 0 {
         return Ok((Vec::new(), "none".into(), 0));
     }
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, trip)
-        .map_err(|e| Error::SplineFailed(format!("assembly: {e:?}")))?;
     let direct = match opts.solver {
         LinearSolver::Cholesky => true,
         LinearSolver::ConjugateGradient => false,
         LinearSolver::Auto => n <= opts.direct_limit,
     };
     if direct {
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, trip)
+            .map_err(|e| Error::SplineFailed(format!("assembly: {e:?}")))?;
         let llt = a
             .sp_cholesky(faer::Side::Lower)
             .map_err(|e| Error::SplineFailed(format!("Cholesky factorisation failed: {e:?}")))?;
@@ -198,31 +198,117 @@ fn solve_spd(
         llt.solve_in_place(b.as_mut());
         return Ok(((0..n).map(|i| b[(i, 0)]).collect(), "cholesky".into(), 1));
     }
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgParams};
-    let mut diag = vec![0.0; n];
-    for t in trip {
-        if t.row == t.col {
-            diag[t.row] += t.val;
+    // Jacobi-preconditioned conjugate gradients on a CSR copy. (faer 0.24's
+    // matrix-free CG reported a non-positive-definite operator on a plain SPD
+    // tridiagonal test matrix here, so this small loop is used instead.)
+    let csr = Csr::from_triplets(n, trip);
+    let (x, it) = pcg(&csr, &rhs, opts.cg_tolerance, opts.cg_max_iterations)?;
+    Ok((x, "cg-jacobi".into(), it))
+}
+
+/// Compressed sparse rows with summed duplicates.
+struct Csr {
+    ptr: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl Csr {
+    fn from_triplets(n: usize, trip: &[Triplet<usize, usize, f64>]) -> Csr {
+        let mut count = vec![0usize; n + 1];
+        for t in trip {
+            count[t.row + 1] += 1;
         }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut col = vec![0u32; trip.len()];
+        let mut val = vec![0.0; trip.len()];
+        for t in trip {
+            let p = fill[t.row];
+            col[p] = t.col as u32;
+            val[p] = t.val;
+            fill[t.row] += 1;
+        }
+        // sort each row and merge duplicates
+        let mut ptr = vec![0usize; n + 1];
+        let mut oc = Vec::with_capacity(trip.len());
+        let mut ov = Vec::with_capacity(trip.len());
+        for i in 0..n {
+            let mut row: Vec<(u32, f64)> = (count[i]..count[i + 1]).map(|p| (col[p], val[p])).collect();
+            row.sort_unstable_by_key(|x| x.0);
+            for (c, v) in row {
+                if oc.len() > ptr[i] && *oc.last().unwrap() == c {
+                    *ov.last_mut().unwrap() += v;
+                } else {
+                    oc.push(c);
+                    ov.push(v);
+                }
+            }
+            ptr[i + 1] = oc.len();
+        }
+        Csr { ptr, col: oc, val: ov }
     }
-    let pre_t: Vec<Triplet<usize, usize, f64>> =
-        (0..n).map(|i| Triplet::new(i, i, if diag[i] > 0.0 { 1.0 / diag[i] } else { 1.0 })).collect();
-    let pre = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &pre_t)
-        .map_err(|e| Error::SplineFailed(format!("preconditioner: {e:?}")))?;
-    let b = faer::Mat::<f64>::from_fn(n, 1, |i, _| rhs[i]);
-    let mut x = faer::Mat::<f64>::zeros(n, 1);
-    let par = faer::get_global_parallelism();
-    let mut buf = MemBuffer::new(conjugate_gradient_scratch(&pre, &a, 1, par));
-    let params = CgParams {
-        rel_tolerance: opts.cg_tolerance,
-        max_iters: opts.cg_max_iterations,
-        initial_guess: faer::matrix_free::InitialGuessStatus::Zero,
-        ..Default::default()
-    };
-    let info = conjugate_gradient(x.as_mut(), &pre, &a, b.as_ref(), params, |_| {}, par, MemStack::new(&mut buf))
-        .map_err(|e| Error::SplineFailed(format!("conjugate gradients: {e:?}")))?;
-    Ok(((0..n).map(|i| x[(i, 0)]).collect(), "cg-jacobi".into(), info.iter_count))
+
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        y.par_iter_mut().enumerate().for_each(|(i, yi)| {
+            let mut s = 0.0;
+            for p in self.ptr[i]..self.ptr[i + 1] {
+                s += self.val[p] * x[self.col[p] as usize];
+            }
+            *yi = s;
+        });
+    }
+
+    fn diag(&self) -> Vec<f64> {
+        (0..self.ptr.len() - 1)
+            .map(|i| {
+                (self.ptr[i]..self.ptr[i + 1]).find(|&p| self.col[p] as usize == i).map(|p| self.val[p]).unwrap_or(0.0)
+            })
+            .collect()
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.par_iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Jacobi-preconditioned conjugate gradients from x = 0.
+fn pcg(a: &Csr, b: &[f64], tol: f64, max_it: usize) -> Result<(Vec<f64>, usize)> {
+    let n = b.len();
+    let dinv: Vec<f64> = a.diag().iter().map(|&d| if d > 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let bn = dot(b, b).sqrt();
+    let mut x = vec![0.0; n];
+    if bn == 0.0 {
+        return Ok((x, 0));
+    }
+    let mut r = b.to_vec();
+    let mut z: Vec<f64> = r.iter().zip(&dinv).map(|(r, d)| r * d).collect();
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; n];
+    for it in 0..max_it {
+        a.mul(&p, &mut ap);
+        let pap = dot(&p, &ap);
+        if pap <= 0.0 {
+            return Err(Error::SplineFailed("conjugate gradients: the matrix is not positive definite".into()));
+        }
+        let alpha = rz / pap;
+        x.par_iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
+        r.par_iter_mut().zip(&ap).for_each(|(r, q)| *r -= alpha * q);
+        if dot(&r, &r).sqrt() <= tol * bn {
+            return Ok((x, it + 1));
+        }
+        z.par_iter_mut().zip(r.par_iter().zip(&dinv)).for_each(|(z, (r, d))| *z = r * d);
+        let rz2 = dot(&r, &z);
+        let beta = rz2 / rz;
+        rz = rz2;
+        p.par_iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+    }
+    Err(Error::SplineFailed(format!(
+        "conjugate gradients did not reach the relative residual {tol} in {max_it} iterations"
+    )))
 }
 
 /// Solve -Δu = source in the spline volume with u = dirichlet on its boundary.

@@ -360,6 +360,17 @@ impl Spline {
         }
         if opts.boundary_enrichment {
             refine::enrich_boundary(&mut sp);
+            // on very thin meshes (fewer than 3 element layers) the truncated
+            // vertex functions can become dependent; check when it is cheap
+            if sp.ctrl.len() <= 4000 {
+                let (rank, n) = check::independence_rank(&sp);
+                if rank < n {
+                    return Err(Error::SplineFailed(format!(
+                        "boundary enrichment made the basis linearly dependent (rank {rank} of {n}); \
+                         the mesh is too thin for it (use at least 3 element layers) or turn it off"
+                    )));
+                }
+            }
         }
         if opts.repair_jacobian {
             sp.report.repaired_elements = refine::repair_jacobian(&mut sp);
