@@ -46,7 +46,8 @@ impl Default for FitOptions {
 pub struct SurfaceDistance {
     /// Largest distance from spline-boundary samples to the surface.
     pub max: f64,
-    /// Root mean square of those distances.
+    /// Root mean square of those distances, each sample weighted by the
+    /// parameter area it stands for (so refined faces do not count more).
     pub rms: f64,
     /// Two-sided Hausdorff distance (also from the surface's vertices to the
     /// sampled spline boundary).
@@ -124,7 +125,13 @@ pub fn surface_distance(sp: &Spline, loc: &SurfaceLocator, surf: &TriMesh, sampl
         .collect();
     let dists: Vec<f64> = pts.par_iter().map(|&p| loc.closest(p).2).collect();
     let max = dists.iter().cloned().fold(0.0, f64::max);
-    let rms = (dists.iter().map(|d| d * d).sum::<f64>() / dists.len().max(1) as f64).sqrt();
+    // area weights in parameter space: a level-L face is 4^-L of its root face
+    let weights: Vec<f64> = faces
+        .iter()
+        .flat_map(|&(e, _, _)| std::iter::repeat(0.25f64.powi(sp.elems[e].level as i32)).take(m * m))
+        .collect();
+    let wsum: f64 = weights.iter().sum();
+    let rms = (dists.iter().zip(&weights).map(|(d, w)| w * d * d).sum::<f64>() / wsum.max(f64::MIN_POSITIVE)).sqrt();
     // reverse direction: surface vertices to the triangulated spline boundary
     let mut tri = TriMesh::default();
     for (fi, _) in faces.iter().enumerate() {
