@@ -65,6 +65,29 @@ pub fn min_scaled_of(sp: &Spline, elems: &[usize], n: usize) -> f64 {
     elems.par_iter().map(|&e| element_gauss(sp, e, n).1).reduce(|| f64::INFINITY, f64::min)
 }
 
+/// Minimum scaled Jacobian of one element over its 3x3x3 Gauss points and a
+/// 5x5x5 lattice including corners, edges and faces (a stricter validity
+/// check than the Gauss points alone: used by the fit and the repair).
+pub fn element_strict(sp: &Spline, e: usize) -> f64 {
+    let pb = sp.bezier_points_of(&sp.elems[e]);
+    let mut ms = element_gauss(sp, e, 3).1;
+    let t = [0.0, 0.25, 0.5, 0.75, 1.0];
+    for &a in &t {
+        for &b in &t {
+            for &c in &t {
+                let (_, j) = map_from_bezier(&pb, [a, b, c]);
+                ms = ms.min(scaled_det(&j));
+            }
+        }
+    }
+    ms
+}
+
+/// `element_strict` minimised over the listed elements.
+pub fn min_strict_of(sp: &Spline, elems: &[usize]) -> f64 {
+    elems.par_iter().map(|&e| element_strict(sp, e)).reduce(|| f64::INFINITY, f64::min)
+}
+
 /// Partition of unity and non-negativity at random points of every element.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct UnityStats {

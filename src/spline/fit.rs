@@ -7,8 +7,8 @@
 //!   min sum_s |X(s) - T(s)|^2 + lambda sum_i |P_i - P_i^0|^2,
 //! lambda = `regularization` x the mean diagonal of the normal matrix, by a
 //! sparse Cholesky factorisation (faer), a few times with new targets. If a fit
-//! step would lower the minimum scaled Jacobian (3x3x3 Gauss points) of the
-//! elements it touches below half its value before the fit (or below 0.1 when
+//! step would lower the minimum scaled Jacobian (3x3x3 Gauss points and a
+//! 5x5x5 lattice with the corners) of the elements it touches below half its value before the fit (or below 0.1 when
 //! that is lower), the step is halved until it does not.
 
 use super::bernstein::{self, NB};
@@ -265,10 +265,23 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
     let touched: Vec<usize> = (0..sp.elems.len())
         .filter(|&e| sp.elems[e].basis.iter().any(|&b| local[b as usize] != u32::MAX))
         .collect();
-    // quality floor: the fit may lower the minimum scaled Jacobian of the
-    // touched elements to half its value (at most to 0.1), never below
-    let before = check::min_scaled_of(sp, &touched, 3);
-    let floor = if before > 0.0 { (0.5 * before).min(0.1) } else { before };
+    // quality floor per element: the fit may lower an element's minimum scaled
+    // Jacobian to half its value (at most to 0.1), never below
+    let floor: Vec<f64> = {
+        use rayon::prelude::*;
+        let spr: &Spline = sp;
+        touched
+            .par_iter()
+            .map(|&e| {
+                let b = check::element_strict(spr, e);
+                if b > 0.0 {
+                    (0.5 * b).min(0.1)
+                } else {
+                    b
+                }
+            })
+            .collect()
+    };
     for _ in 0..fo.iterations {
         let p0: Vec<[f64; 3]> = unknowns.iter().map(|&i| sp.ctrl[i as usize]).collect();
         // targets
@@ -300,25 +313,51 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
             }
         }
         llt.solve_in_place(rhs.as_mut());
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        for _ in 0..=fo.max_backtracks {
+        // per-function step lengths, halved on the functions of every element
+        // that would fall below its floor
+        let mut alpha = vec![1.0f64; n];
+        for round in 0..=fo.max_backtracks {
             for (l, &i) in unknowns.iter().enumerate() {
                 let p = p0[l];
-                sp.ctrl[i as usize] = [0, 1, 2].map(|j| p[j] + alpha * (rhs[(l, j)] - p[j]));
+                sp.ctrl[i as usize] = [0, 1, 2].map(|j| p[j] + alpha[l] * (rhs[(l, j)] - p[j]));
             }
-            let after = check::min_scaled_of(sp, &touched, 3);
-            if after >= floor {
-                accepted = true;
+            let bad: Vec<usize> = {
+                let spr: &Spline = sp;
+                (0..touched.len())
+                    .into_par_iter()
+                    .filter(|&t| check::element_strict(spr, touched[t]) < floor[t])
+                    .map(|t| touched[t])
+                    .collect()
+            };
+            if bad.is_empty() {
                 break;
             }
-            alpha *= 0.5;
-        }
-        if !accepted {
-            for (l, &i) in unknowns.iter().enumerate() {
-                sp.ctrl[i as usize] = p0[l];
+            let last = round == fo.max_backtracks;
+            for &e in &bad {
+                for &b in &sp.elems[e].basis {
+                    let l = local[b as usize];
+                    if l != u32::MAX {
+                        alpha[l as usize] = if last { 0.0 } else { alpha[l as usize] * 0.5 };
+                    }
+                }
             }
-            break;
+            if last {
+                for (l, &i) in unknowns.iter().enumerate() {
+                    let p = p0[l];
+                    sp.ctrl[i as usize] = [0, 1, 2].map(|j| p[j] + alpha[l] * (rhs[(l, j)] - p[j]));
+                }
+                // mixing moved and reverted points could still break an element:
+                // then drop the whole round
+                let spr: &Spline = sp;
+                let still = (0..touched.len())
+                    .into_par_iter()
+                    .any(|t| check::element_strict(spr, touched[t]) < floor[t]);
+                if still {
+                    for (l, &i) in unknowns.iter().enumerate() {
+                        sp.ctrl[i as usize] = p0[l];
+                    }
+                }
+            }
         }
     }
     Ok(())

@@ -58,6 +58,8 @@ pub struct RefineReport {
     pub elements_after: usize,
     pub basis_before: usize,
     pub basis_after: usize,
+    /// Automatic passes undone because they left a non-positive Jacobian.
+    pub reverted_passes: usize,
     /// Boundary distance before / after (automatic refinement only).
     pub distance_before: Option<fit::SurfaceDistance>,
     pub distance_after: Option<fit::SurfaceDistance>,
@@ -205,10 +207,14 @@ fn trilinear(sp: &Spline, root: u32, p: [f64; 3]) -> [f64; 3] {
 pub(super) fn repair_jacobian(sp: &mut Spline) -> usize {
     let mut repaired: HashSet<usize> = HashSet::new();
     for _round in 0..50 {
-        let q = super::check::gauss_jacobians(sp, 3);
-        let bad: Vec<usize> = (0..sp.elems.len())
-            .filter(|&e| q.per_element[e] <= 0.0 && !repaired.contains(&e))
-            .collect();
+        let bad: Vec<usize> = {
+            use rayon::prelude::*;
+            let sp_ref: &Spline = sp;
+            (0..sp_ref.elems.len())
+                .into_par_iter()
+                .filter(|e| !repaired.contains(e) && super::check::element_strict(sp_ref, *e) <= 0.0)
+                .collect()
+        };
         if bad.is_empty() {
             break;
         }
@@ -378,10 +384,19 @@ pub(super) fn refine_auto_with(
         cand.sort_by(|a, b| b.1.total_cmp(&a.1));
         let k = ((nb as f64 * ro.fraction).ceil() as usize).max(1).min(cand.len());
         let ids: Vec<usize> = cand[..k].iter().map(|c| c.0).collect();
-        rep.refined += refine_elements_with(sp, &ids, NodeFilter::BoundaryLayers)?;
+        let saved = sp.clone();
+        let n = refine_elements_with(sp, &ids, NodeFilter::BoundaryLayers)?;
         if fo.enabled {
             fit::fit_boundary_with(sp, loc, fo)?;
         }
+        // the fit checks a lattice of points; if the finer Gauss points of the
+        // refined elements still find a fold, undo this pass and stop
+        if super::check::gauss_jacobians(sp, 3).negative_elements > 0 {
+            *sp = saved;
+            rep.reverted_passes += 1;
+            break;
+        }
+        rep.refined += n;
     }
     rep.elements_after = sp.num_elements();
     rep.basis_after = sp.num_basis();
