@@ -1,5 +1,6 @@
 //! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
 
+pub mod obj;
 pub mod vtk;
 pub mod bext;
 pub mod lsdyna;
