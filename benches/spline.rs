@@ -1,9 +1,10 @@
 //! Spline-stage measurements for BENCHMARKS.md ("Spline" section).
 //!
-//! cargo bench --bench spline -- [reference|fit|properties|poisson|all]
+//! cargo bench --bench spline -- [reference|sharp|fit|properties|poisson|all]
 //!
 //! reference   construction / extraction time, Gauss-point Jacobians on HexGen's meshes
 //! fit         boundary distance to the input surface: before fit, after fit, after local refinement
+//! sharp       sharp-feature angle vs. folded elements and repairs
 //! properties  partition of unity, linear reproduction, continuity jumps on built-in meshes
 //! poisson     L2 convergence of the IGA Poisson solver (block and rod)
 
@@ -60,8 +61,8 @@ fn reference() {
 
 fn fit() {
     println!("## boundary distance to the input surface (relative to the bbox diagonal)");
-    println!("| mesh | control net (hex boundary) Hausdorff | spline before fit: max / Hausdorff | after fit: max / Hausdorff | after auto refinement: max / Hausdorff | refined elements | basis after | min scaled J after | fit s | refine s |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("| mesh | control net (hex boundary) Hausdorff | spline before fit: max / Hausdorff | after fit: max / Hausdorff | after auto refinement: max / Hausdorff | refined elements | basis after | repaired elements | min scaled J after | fit s | refine s |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for name in MODELS {
         let (hex, surf) = load(name);
         let loc = sddpm::geometry::SurfaceLocator::new(&surf);
@@ -85,7 +86,7 @@ fn fit() {
         let f = sp_fit.report().fitting_after.clone().unwrap();
         let a = r.fitting_after.clone().unwrap();
         println!(
-            "| {name} | {:.3}% (vertices) | {:.3}% / {:.3}% | {:.3}% / {:.3}% | {:.3}% / {:.3}% | {} | {} | {:.4} | {:.2} | {:.2} |",
+            "| {name} | {:.3}% (vertices) | {:.3}% / {:.3}% | {:.3}% / {:.3}% | {:.3}% / {:.3}% | {} | {} | {} | {:.4} | {:.2} | {:.2} |",
             100.0 * net,
             100.0 * b.max_relative,
             100.0 * b.hausdorff_relative,
@@ -95,10 +96,36 @@ fn fit() {
             100.0 * a.hausdorff_relative,
             r.refined_elements,
             r.basis_functions,
+            r.repaired_elements,
             r.min_scaled_jacobian,
             sp_fit.report().seconds.fitting,
             r.seconds.refinement
         );
+    }
+}
+
+fn sharp() {
+    println!("## sharp-feature angle vs. folds (strict check: 3x3x3 Gauss points + 5x5x5 lattice)");
+    println!("| mesh | sharp angle | sharp edges | elements folded before repair | repaired elements | basis after repair | min scaled J (Gauss) |");
+    println!("|---|---|---|---|---|---|---|");
+    for name in MODELS {
+        let (hex, _) = load(name);
+        for ang in [None, Some(35.0), Some(60.0), Some(80.0)] {
+            let o = SplineOptions { sharp_angle_deg: ang, repair_jacobian: false, ..Default::default() };
+            let sp = Spline::construct(&hex, &o).unwrap();
+            let all: Vec<usize> = (0..sp.num_elements()).collect();
+            let folded = all.iter().filter(|&&e| check::element_strict(&sp, e) <= 0.0).count();
+            let sp2 = Spline::construct(&hex, &SplineOptions { sharp_angle_deg: ang, ..Default::default() }).unwrap();
+            let r = sp2.report();
+            println!(
+                "| {name} | {} | {} | {folded} | {} | {} | {:.4} |",
+                ang.map(|a| format!("{a}°")).unwrap_or("off".into()),
+                r.sharp_edges,
+                r.repaired_elements,
+                r.basis_functions,
+                r.min_scaled_jacobian
+            );
+        }
     }
 }
 
@@ -240,6 +267,9 @@ fn main() {
     let t = Instant::now();
     if what == "reference" || what == "all" {
         reference();
+    }
+    if what == "sharp" || what == "all" {
+        sharp();
     }
     if what == "properties" || what == "all" {
         properties();

@@ -37,7 +37,8 @@ pub use refine::{RefineOptions, RefineReport};
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SplineOptions {
     /// A boundary edge is sharp when the normals of its two boundary quads
-    /// differ by more than this angle, in degrees (default 60). Sharp edges get
+    /// differ by more than this angle, in degrees (default 60); boundary edges of
+    /// a single element (two boundary faces of one hex) are always sharp. Sharp edges get
     /// the curve rule (C0 across them, the edge curve follows its vertices) and
     /// vertices where three or more sharp edges meet, or where a sharp curve turns
     /// by more than this angle, are interpolated. `None` turns detection off.
@@ -59,7 +60,8 @@ pub struct SplineOptions {
     /// (ringing across graded layers; see BENCHMARKS.md). With false the control
     /// points are the hex vertices.
     pub interpolate_vertices: bool,
-    /// Repair elements whose Jacobian is not positive at some 3x3x3 Gauss point:
+    /// Repair elements whose Jacobian is not positive at some 3x3x3 Gauss point
+    /// or 5x5x5 lattice point (corners included):
     /// their 64 Bézier nodes become Bernstein functions placed on the control-mesh
     /// element's trilinear map (C0 there), repeated while neighbours go bad
     /// (default true). The spline is then valid wherever the hex mesh is.

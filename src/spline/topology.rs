@@ -283,7 +283,9 @@ impl Topology {
             if ed.bquads.is_empty() {
                 continue;
             }
-            if ed.bquads.len() != 2 {
+            // an edge of a single element with two boundary faces: the element's
+            // corner there must survive, whatever the surface does
+            if ed.bquads.len() != 2 || ed.elems.len() == 1 {
                 ed.sharp = true;
                 continue;
             }
