@@ -208,3 +208,22 @@ fn spline_vtk_exports() {
     assert_eq!(c.elements.len(), sp.topology().ne);
     write_control_points_vtk(&tmp("points.vtk"), &sp).unwrap();
 }
+
+#[test]
+fn spline_write_outputs_for_the_pipeline() {
+    let sp = refined_spline();
+    let dir = tmp("run");
+    let j = sddpm::spline::write_outputs(&dir, &sp, &Default::default()).unwrap();
+    for k in ["elements", "basis_functions", "bext", "lsdyna", "min_scaled_jacobian"] {
+        assert!(j.get(k).is_some(), "{k}");
+    }
+    assert_eq!(j["bext"], "spline.bext");
+    assert_eq!(j["lsdyna"], "model.k");
+    assert_eq!(j["elements"].as_u64().unwrap() as usize, sp.num_elements());
+    let b = read_bext(&dir.join("spline.bext")).unwrap();
+    assert_eq!(b.elements.len(), sp.num_elements());
+    let deck = std::fs::read_to_string(dir.join("model.k")).unwrap();
+    assert!(deck.contains("\nspline.bext\n"));
+    assert!(dir.join("spline.vtk").exists() && dir.join("spline_control.vtk").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

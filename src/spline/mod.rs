@@ -708,3 +708,62 @@ pub fn scaled_det(j: &[[f64; 3]; 3]) -> f64 {
 
 #[allow(dead_code)]
 const _: () = assert!(R % 8 == 0);
+
+/// File names and settings of `write_outputs`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputOptions {
+    /// BEXT file (default "spline.bext").
+    pub bext: String,
+    /// LS-DYNA deck including it (default "model.k").
+    pub lsdyna: String,
+    /// Sampled spline for ParaView (default Some("spline.vtk"); None skips it).
+    pub vtk: Option<String>,
+    /// Control mesh (default Some("spline_control.vtk")).
+    pub control_vtk: Option<String>,
+    /// Sub-cells per direction and element in the sampled VTK (default 4).
+    pub vtk_samples: usize,
+    /// Sparse BEXT rows (default: `SplineOptions::sparse_bext` of the spline).
+    pub sparse_bext: Option<bool>,
+    pub deck: crate::export::lsdyna::DeckOptions,
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        OutputOptions {
+            bext: "spline.bext".into(),
+            lsdyna: "model.k".into(),
+            vtk: Some("spline.vtk".into()),
+            control_vtk: Some("spline_control.vtk".into()),
+            vtk_samples: 4,
+            sparse_bext: None,
+            deck: Default::default(),
+        }
+    }
+}
+
+/// Write the spline's files into `dir` (BEXT, the LS-DYNA deck that includes it,
+/// optional VTK files) and return the `spline` object of report.json: the keys
+/// DESIGN.md fixes ("elements", "basis_functions", "bext", "lsdyna") plus the
+/// whole `SplineReport` and the names of the VTK files.
+pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> Result<serde_json::Value> {
+    use crate::export::{bext, lsdyna, spline_vtk};
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
+    let sparse = o.sparse_bext.unwrap_or(sp.opts.sparse_bext);
+    bext::write_bext(&dir.join(&o.bext), sp, sparse)?;
+    lsdyna::write_iga_deck(&dir.join(&o.lsdyna), &o.bext, &o.deck)?;
+    if let Some(v) = &o.vtk {
+        spline_vtk::write_spline_vtk(&dir.join(v), sp, o.vtk_samples)?;
+    }
+    if let Some(v) = &o.control_vtk {
+        spline_vtk::write_control_mesh_vtk(&dir.join(v), sp)?;
+    }
+    let mut j = serde_json::to_value(&sp.report).map_err(|e| Error::Internal(e.to_string()))?;
+    if let Some(m) = j.as_object_mut() {
+        m.insert("bext".into(), o.bext.clone().into());
+        m.insert("lsdyna".into(), o.lsdyna.clone().into());
+        m.insert("vtk".into(), o.vtk.clone().into());
+        m.insert("control_vtk".into(), o.control_vtk.clone().into());
+        m.insert("bext_sparse".into(), sparse.into());
+    }
+    Ok(j)
+}
