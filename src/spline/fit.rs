@@ -2,7 +2,8 @@
 //!
 //! The fit moves only the control points of basis functions that do not vanish
 //! on the boundary. It samples every boundary face of every leaf, takes the
-//! closest surface point of each sample as its target and solves the
+//! closest surface point of each sample as its target (and, two-sided, every
+//! surface vertex as the target of its closest spline-boundary point) and solves the
 //! regularised least-squares problem
 //!   min sum_s |X(s) - T(s)|^2 + lambda sum_i |P_i - P_i^0|^2,
 //! lambda = `regularization` x the mean diagonal of the normal matrix, by a
@@ -33,11 +34,15 @@ pub struct FitOptions {
     pub regularization: f64,
     /// Halvings of a fit step that would create a non-positive Jacobian (default 8).
     pub max_backtracks: usize,
+    /// Also pull the spline boundary towards every surface vertex (its closest
+    /// point on the sampled boundary), so that surface detail the boundary
+    /// misses counts too (default true).
+    pub two_sided: bool,
 }
 
 impl Default for FitOptions {
     fn default() -> Self {
-        FitOptions { enabled: true, iterations: 3, samples: 4, regularization: 1e-3, max_backtracks: 8 }
+        FitOptions { enabled: true, iterations: 3, samples: 4, regularization: 1e-3, max_backtracks: 8, two_sided: true }
     }
 }
 
@@ -191,7 +196,7 @@ pub fn boundary_element_distances(sp: &Spline, loc: &SurfaceLocator, samples: us
 }
 
 /// Fit the boundary control points (see the module documentation).
-pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions) -> Result<()> {
+pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, fo: &FitOptions) -> Result<()> {
     use faer::linalg::solvers::Solve;
     use faer::sparse::{SparseColMat, Triplet};
     use rayon::prelude::*;
@@ -236,31 +241,15 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
         }
     }
     let n = unknowns.len();
-    // normal matrix (constant over the iterations)
-    let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+    // Tikhonov weight from the forward rows (fixed over the iterations)
     let mut diag = vec![0.0; n];
     for (ids, vals) in &rows {
         for (a, &ia) in ids.iter().enumerate() {
-            let la = local[ia as usize] as usize;
-            diag[la] += vals[a] * vals[a];
-            for (b, &ib) in ids.iter().enumerate() {
-                let lb = local[ib as usize] as usize;
-                if lb <= la {
-                    trip.push(Triplet::new(la, lb, vals[a] * vals[b]));
-                }
-            }
+            diag[local[ia as usize] as usize] += vals[a] * vals[a];
         }
     }
     let lambda = fo.regularization * diag.iter().sum::<f64>() / n.max(1) as f64;
-    for (i, dg) in diag.iter().enumerate() {
-        trip.push(Triplet::new(i, i, lambda));
-        let _ = dg;
-    }
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
-        .map_err(|e| Error::SplineFailed(format!("fit matrix: {e:?}")))?;
-    let llt = a
-        .sp_cholesky(faer::Side::Lower)
-        .map_err(|e| Error::SplineFailed(format!("fit factorisation: {e:?}")))?;
+    let kf = 2 * m;
     // elements touched by the unknowns (for the Jacobian safeguard)
     let touched: Vec<usize> = (0..sp.elems.len())
         .filter(|&e| sp.elems[e].basis.iter().any(|&b| local[b as usize] != u32::MAX))
@@ -298,20 +287,84 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, fo: &FitOptions)
                 loc.closest(x).0
             })
             .collect();
+        // reverse rows: every surface vertex pulls the closest point of the
+        // (sampled, triangulated) spline boundary towards it
+        let mut rev: Vec<(Vec<u32>, Vec<f64>, [f64; 3])> = Vec::new();
+        if fo.two_sided {
+            let spr: &Spline = sp;
+            let params: Vec<(usize, [f64; 3])> = faces
+                .iter()
+                .flat_map(|&(e, d, s)| (0..kf * kf).map(move |k| (e, face_param(d, s, k % kf, k / kf, kf, false))))
+                .collect();
+            let mut tri = TriMesh { vertices: params.par_iter().map(|&(e, p)| point_of(spr, e, p)).collect(), triangles: Vec::new() };
+            for fi in 0..faces.len() {
+                let base = (fi * kf * kf) as u32;
+                for b in 0..kf - 1 {
+                    for a in 0..kf - 1 {
+                        let i0 = base + (b * kf + a) as u32;
+                        let (i1, i2, i3) = (i0 + 1, i0 + 1 + kf as u32, i0 + kf as u32);
+                        tri.triangles.push([i0, i1, i2]);
+                        tri.triangles.push([i0, i2, i3]);
+                    }
+                }
+            }
+            let bl = SurfaceLocator::new(&tri);
+            rev = surf
+                .vertices
+                .par_iter()
+                .filter_map(|&q| {
+                    let c = bl.closest_detailed(q)?;
+                    let t = tri.triangles[c.triangle as usize];
+                    let e = params[t[0] as usize].0;
+                    let mut p = [0.0; 3];
+                    for (k, &vi) in t.iter().enumerate() {
+                        for d in 0..3 {
+                            p[d] += c.bary[k] * params[vi as usize].1[d];
+                        }
+                    }
+                    let el = &spr.elems[e];
+                    let v = apply_rows(&el.op, &bernstein::values(p));
+                    let mut ids = Vec::new();
+                    let mut vals = Vec::new();
+                    for (r, &x) in v.iter().enumerate() {
+                        if x.abs() > 1e-13 && local[el.basis[r] as usize] != u32::MAX {
+                            ids.push(el.basis[r]);
+                            vals.push(x);
+                        }
+                    }
+                    (!ids.is_empty()).then_some((ids, vals, q))
+                })
+                .collect();
+        }
+        // normal equations of this round
+        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
         let mut rhs = faer::Mat::<f64>::zeros(n, 3);
-        for ((ids, vals), t) in rows.iter().zip(&targets) {
-            for (k, &i) in ids.iter().enumerate() {
-                let l = local[i as usize] as usize;
+        let all = rows.iter().zip(&targets).map(|((i, v), t)| (i, v, t)).chain(rev.iter().map(|(i, v, t)| (i, v, t)));
+        for (ids, vals, t) in all {
+            for (a, &ia) in ids.iter().enumerate() {
+                let la = local[ia as usize] as usize;
                 for j in 0..3 {
-                    rhs[(l, j)] += vals[k] * t[j];
+                    rhs[(la, j)] += vals[a] * t[j];
+                }
+                for (b, &ib) in ids.iter().enumerate() {
+                    let lb = local[ib as usize] as usize;
+                    if lb <= la {
+                        trip.push(Triplet::new(la, lb, vals[a] * vals[b]));
+                    }
                 }
             }
         }
         for (l, p) in p0.iter().enumerate() {
+            trip.push(Triplet::new(l, l, lambda));
             for j in 0..3 {
                 rhs[(l, j)] += lambda * p[j];
             }
         }
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+            .map_err(|e| Error::SplineFailed(format!("fit matrix: {e:?}")))?;
+        let llt = a
+            .sp_cholesky(faer::Side::Lower)
+            .map_err(|e| Error::SplineFailed(format!("fit factorisation: {e:?}")))?;
         llt.solve_in_place(rhs.as_mut());
         // per-function step lengths, halved on the functions of every element
         // that would fall below its floor
@@ -370,7 +423,7 @@ impl Spline {
             return Err(Error::InvalidArgument("the target surface has no triangles".into()));
         }
         let loc = SurfaceLocator::new(surface);
-        fit_boundary_with(self, &loc, fo)?;
+        fit_boundary_with(self, &loc, surface, fo)?;
         let d = surface_distance(self, &loc, surface, fo.samples);
         self.report.fitting_after = Some(d.clone());
         self.update_report();

@@ -292,7 +292,7 @@ pub fn build_spline(
         let loc = crate::geometry::SurfaceLocator::new(surf);
         sp.report.fitting_before = Some(fit::surface_distance(&sp, &loc, surf, opts.fit.samples));
         if opts.fit.enabled {
-            fit::fit_boundary_with(&mut sp, &loc, &opts.fit)?;
+            fit::fit_boundary_with(&mut sp, &loc, surf, &opts.fit)?;
         }
         sp.report.seconds.fitting = t1.elapsed().as_secs_f64();
         check_progress(progress, 0.6, "spline: boundary fit")?;

@@ -387,7 +387,7 @@ pub(super) fn refine_auto_with(
         let saved = sp.clone();
         let n = refine_elements_with(sp, &ids, NodeFilter::BoundaryLayers)?;
         if fo.enabled {
-            fit::fit_boundary_with(sp, loc, fo)?;
+            fit::fit_boundary_with(sp, loc, surf, fo)?;
         }
         // the fit checks a lattice of points; if the finer Gauss points of the
         // refined elements still find a fold, undo this pass and stop
