@@ -15,3 +15,4 @@ pub mod verify;
 pub use error::{Error, Result, Status};
 pub mod export;
 pub mod hex;
+pub mod spline;

@@ -2,3 +2,6 @@
 
 pub mod obj;
 pub mod vtk;
+pub mod bext;
+pub mod lsdyna;
+pub mod spline_vtk;

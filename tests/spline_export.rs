@@ -1,0 +1,229 @@
+//! Exports of the spline: BEXT round trip, LS-DYNA deck layout against the
+//! keyword-manual fixture, VTK of the sampled spline.
+
+use sddpm::error::NoProgress;
+use sddpm::export::bext::{parse_bext, read_bext, to_bext_string, write_bext, Bext};
+use sddpm::export::lsdyna::{field, iga_deck_string, parse_deck, write_iga_deck, DeckOptions, IncludeStyle};
+use sddpm::export::spline_vtk::{spline_vtk_string, write_control_mesh_vtk, write_control_points_vtk};
+use sddpm::export::vtk::parse_vtk_legacy;
+use sddpm::spline::{build_spline, meshes, Spline, SplineOptions};
+use std::path::PathBuf;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sddpm_spline_export_{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn refined_spline() -> Spline {
+    let hex = meshes::extraordinary_edge(5, 2, 3);
+    let mut sp = build_spline(&hex, None, &SplineOptions::default(), &mut NoProgress).unwrap();
+    sp.refine(&[0, 7]).unwrap();
+    sp
+}
+
+#[test]
+fn spline_bext_round_trip_dense_and_sparse() {
+    let sp = refined_spline();
+    for sparse in [false, true] {
+        let path = tmp(if sparse { "s.bext" } else { "d.bext" });
+        write_bext(&path, &sp, sparse).unwrap();
+        let b = read_bext(&path).unwrap();
+        assert_eq!(b.nodes.len(), sp.num_basis());
+        assert_eq!(b.elements.len(), sp.num_elements());
+        for (i, p) in sp.control_points().iter().enumerate() {
+            assert_eq!([b.nodes[i][0], b.nodes[i][1], b.nodes[i][2]], *p, "control point {i}");
+            assert_eq!(b.nodes[i][3], 1.0);
+        }
+        for e in 0..sp.num_elements() {
+            assert_eq!(b.elements[e].ids.as_slice(), sp.element_basis(e).unwrap());
+            assert_eq!(b.elements[e].operator, sp.extraction_operator(e).unwrap(), "operator of element {e}");
+            let pb = sp.bezier_points(e).unwrap();
+            let qb = b.bezier_points(e);
+            for k in 0..64 {
+                for i in 0..3 {
+                    assert!((pb[k][i] - qb[k][i]).abs() < 1e-12);
+                }
+            }
+        }
+        // writing the parsed content again gives the same text
+        assert_eq!(sddpm::export::bext::bext_text(&b, sparse), to_bext_string(&sp, sparse));
+    }
+    let text = to_bext_string(&sp, false);
+    assert!(text.starts_with("B E X T\ntype hex\nnodeN "));
+    assert!(text.contains("\nbelem "));
+}
+
+#[test]
+fn spline_bext_rejects_malformed() {
+    let sp = refined_spline();
+    let good = to_bext_string(&sp, true);
+    assert!(parse_bext(&good).is_ok());
+    for bad in [
+        good.replacen("B E X T", "BEXX", 1),
+        good.replacen("type hex", "type quad", 1),
+        good.replacen("belem", "bel", 1),
+        good.replacen(" 3 3 3", " 2 2 2", 1),
+        good[..good.len() / 2].to_string(),
+        good.replacen("\ns ", "\nq ", 1),
+    ] {
+        assert!(parse_bext(&bad).is_err());
+    }
+    let e = read_bext(&tmp("does_not_exist.bext")).unwrap_err();
+    assert_eq!(e.status(), sddpm::Status::Io);
+    std::fs::write(tmp("bad.bext"), "B E X T\nnodeN x\n").unwrap();
+    assert_eq!(read_bext(&tmp("bad.bext")).unwrap_err().status(), sddpm::Status::Parse);
+    let _ = Bext::default();
+}
+
+struct Layout {
+    keyword: String,
+    card: usize,
+    name: String,
+    ty: char,
+    start: usize,
+    width: usize,
+}
+
+fn layouts() -> Vec<Layout> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lsdyna/keyword_layouts.txt");
+    std::fs::read_to_string(p)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            let t: Vec<&str> = l.split_whitespace().collect();
+            Layout {
+                keyword: t[0].into(),
+                card: t[1].parse().unwrap(),
+                name: t[2].into(),
+                ty: t[3].chars().next().unwrap(),
+                start: t[4].parse().unwrap(),
+                width: t[5].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+/// Check every card of the keywords listed in the fixture: fixed columns,
+/// numbers where the manual has numbers, nothing beyond the last field.
+/// Returns the parsed value of each (keyword, field).
+fn check_deck(text: &str) -> std::collections::HashMap<(String, String), String> {
+    let deck = parse_deck(text);
+    assert_eq!(deck.first().map(|k| k.name.as_str()), Some("KEYWORD"));
+    assert_eq!(deck.last().map(|k| k.name.as_str()), Some("END"));
+    let lay = layouts();
+    let mut values = std::collections::HashMap::new();
+    for kw in &deck {
+        let fields: Vec<&Layout> = lay.iter().filter(|l| l.keyword == kw.name).collect();
+        if fields.is_empty() {
+            assert!(["KEYWORD", "END"].contains(&kw.name.as_str()), "keyword {} has no layout in the fixture", kw.name);
+            continue;
+        }
+        let ncards = fields.iter().map(|f| f.card).max().unwrap();
+        assert_eq!(kw.cards.len(), ncards, "{}: {} cards, the manual has {}", kw.name, kw.cards.len(), ncards);
+        for (ci, line) in kw.cards.iter().enumerate() {
+            let cf: Vec<&&Layout> = fields.iter().filter(|f| f.card == ci + 1).collect();
+            let end = cf.iter().map(|f| f.start + f.width).max().unwrap();
+            assert!(line.len() <= end, "{} card {}: '{line}' is longer than its {end} columns", kw.name, ci + 1);
+            assert!(!line.contains(','), "{} card {}: free format in a fixed-format deck", kw.name, ci + 1);
+            for f in cf {
+                let v = field(line, f.start, f.width);
+                // a field must not straddle into the next one: its text sits inside its columns
+                if f.ty != 'A' && !v.is_empty() {
+                    let raw = &line[f.start..(f.start + f.width).min(line.len())];
+                    assert!(raw.starts_with(' ') || raw.len() == f.width, "{}.{} not right-aligned: '{raw}'", kw.name, f.name);
+                }
+                match f.ty {
+                    'I' => assert!(v.is_empty() || v.parse::<i64>().is_ok(), "{}.{} = '{v}' is not an integer", kw.name, f.name),
+                    'F' => assert!(v.is_empty() || v.parse::<f64>().is_ok(), "{}.{} = '{v}' is not a real", kw.name, f.name),
+                    _ => {}
+                }
+                values.insert((kw.name.clone(), f.name.clone()), v.to_string());
+            }
+        }
+    }
+    values
+}
+
+#[test]
+fn spline_lsdyna_fixture_is_consistent() {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lsdyna/reference_deck.k");
+    let v = check_deck(&std::fs::read_to_string(p).unwrap());
+    assert_eq!(v[&("SECTION_SOLID".into(), "ELFORM".into())], "201");
+}
+
+#[test]
+fn spline_lsdyna_deck_matches_manual_layout() {
+    let opts = DeckOptions::default();
+    let text = iga_deck_string("spline.bext", &opts).unwrap();
+    let v = check_deck(&text);
+    let g = |k: &str, f: &str| v[&(k.to_string(), f.to_string())].clone();
+    assert_eq!(g("IGA_INCLUDE_BEZIER", "FILENAME"), "spline.bext");
+    assert_eq!(g("IGA_INCLUDE_BEZIER", "FILETYPE"), "1");
+    assert_eq!(g("IGA_INCLUDE_BEZIER", "DIM"), "3");
+    assert_eq!(g("IGA_INCLUDE_BEZIER", "PID"), g("PART", "PID"));
+    assert_eq!(g("PART", "SECID"), g("SECTION_SOLID", "SECID"));
+    assert_eq!(g("PART", "MID"), g("MAT_ELASTIC", "MID"));
+    assert_eq!(g("SECTION_SOLID", "ELFORM"), "201");
+    assert_eq!(g("MAT_ELASTIC", "E").parse::<f64>().unwrap(), 210000.0);
+    assert_eq!(g("MAT_ELASTIC", "RO").parse::<f64>().unwrap(), 7.85e-9);
+    assert_eq!(g("MAT_ELASTIC", "PR").parse::<f64>().unwrap(), 0.3);
+    assert_eq!(g("CONTROL_IMPLICIT_EIGENVALUE", "NEIG"), "10");
+    // the same keyword sequence as the hand-written manual-layout deck
+    let names: Vec<String> = parse_deck(&text).into_iter().map(|k| k.name).collect();
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lsdyna/reference_deck.k");
+    let reference: Vec<String> = parse_deck(&std::fs::read_to_string(p).unwrap()).into_iter().map(|k| k.name).collect();
+    assert_eq!(names, reference);
+    // file output, odd numbers still fit their fields, bad options refused
+    let path = tmp("model.k");
+    let odd = DeckOptions { density: 1.234567891e-9, youngs_modulus: 123456789.0, poisson_ratio: 0.33333333, ..Default::default() };
+    write_iga_deck(&path, "spline.bext", &odd).unwrap();
+    let v = check_deck(&std::fs::read_to_string(&path).unwrap());
+    let ro: f64 = v[&("MAT_ELASTIC".to_string(), "RO".to_string())].parse().unwrap();
+    assert!((ro / 1.234567891e-9 - 1.0).abs() < 1e-4, "{ro}");
+    assert!(iga_deck_string("", &opts).is_err());
+    assert!(iga_deck_string("a\nb", &opts).is_err());
+    assert!(iga_deck_string("x.bext", &DeckOptions { poisson_ratio: 0.5, ..Default::default() }).is_err());
+    let legacy = iga_deck_string("rod.bext", &DeckOptions { include: IncludeStyle::IncludeTransform, ..Default::default() }).unwrap();
+    assert!(legacy.contains("*INCLUDE_TRANSFORM\nrod.bext\n1,0,1,0,0\n"));
+}
+
+#[test]
+fn spline_vtk_exports() {
+    let sp = refined_spline();
+    let s = spline_vtk_string(&sp, 3).unwrap();
+    let m = parse_vtk_legacy(&s).unwrap();
+    assert_eq!(m.elements.len(), sp.num_elements() * 27);
+    assert_eq!(m.nodes.len(), sp.num_elements() * 64);
+    assert!(s.contains("SCALARS jacobian double 1"));
+    // first sampled point of element 0 is its corner
+    let (x, _) = sp.evaluate(0, 0.0, 0.0, 0.0).unwrap();
+    for i in 0..3 {
+        assert!((m.nodes[0][i] - x[i]).abs() < 1e-12);
+    }
+    assert!(spline_vtk_string(&sp, 0).is_err());
+    write_control_mesh_vtk(&tmp("control.vtk"), &sp).unwrap();
+    let c = sddpm::export::vtk::read_vtk_legacy(&tmp("control.vtk")).unwrap();
+    assert_eq!(c.elements.len(), sp.topology().ne);
+    write_control_points_vtk(&tmp("points.vtk"), &sp).unwrap();
+}
+
+#[test]
+fn spline_write_outputs_for_the_pipeline() {
+    let sp = refined_spline();
+    let dir = tmp("run");
+    let j = sddpm::spline::write_outputs(&dir, &sp, &Default::default()).unwrap();
+    for k in ["elements", "basis_functions", "bext", "lsdyna", "min_scaled_jacobian"] {
+        assert!(j.get(k).is_some(), "{k}");
+    }
+    assert_eq!(j["bext"], "spline.bext");
+    assert_eq!(j["lsdyna"], "model.k");
+    assert_eq!(j["elements"].as_u64().unwrap() as usize, sp.num_elements());
+    let b = read_bext(&dir.join("spline.bext")).unwrap();
+    assert_eq!(b.elements.len(), sp.num_elements());
+    let deck = std::fs::read_to_string(dir.join("model.k")).unwrap();
+    assert!(deck.contains("\nspline.bext\n"));
+    assert!(dir.join("spline.vtk").exists() && dir.join("spline_control.vtk").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
