@@ -51,7 +51,6 @@ fn main() {
             "--no-pillow" => opts.pillow = false,
             "--no-quality" => {
                 opts.smooth_iterations = 0;
-                opts.untangle_passes = 0;
                 opts.optimise_passes = 0;
             }
             a => filters.push(a.to_string()),

@@ -1,3 +1,4 @@
 //! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
 
 pub mod vtk;
+pub mod hexfmt;

@@ -98,9 +98,20 @@ pub fn pillow(w: &mut Work) -> Result<PillowReport> {
         }
     }
     let first_new = w.mesh.elements.len();
+    let has_targets = w.target.len() == first_new;
+    // axis of each local edge of a hex face: (face corner 0 -> 1, 0 -> 3, normal)
+    const UNIT: [[i32; 3]; 8] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+    let axis_of = |i: usize, j: usize| (0..3).find(|&a| UNIT[i][a] != UNIT[j][a]).unwrap_or(0);
     for q in &bq {
         let [a, b, c, d] = q.nodes;
         w.mesh.elements.push([copy[a as usize], copy[b as usize], copy[c as usize], copy[d as usize], a, b, c, d]);
+        if has_targets {
+            let f = super::topology::HEX_FACES[q.face as usize];
+            let t = w.target[q.element as usize];
+            let (au, av) = (axis_of(f[0], f[1]), axis_of(f[0], f[3]));
+            let aw = 3 - au - av;
+            w.target.push([t[au], t[av], 0.5 * t[aw]]);
+        }
     }
     // keep every element valid where it can be: pull inner copies back towards the
     // surface while an old element got inverted by the shrink or a new one is inverted
@@ -186,6 +197,7 @@ mod tests {
             bgraph: Default::default(),
             nbr: Default::default(),
             n2e: Default::default(),
+            target: vec![[1.0; 3]; h.mesh.elements.len()],
         };
         w.rebuild();
         w

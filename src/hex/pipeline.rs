@@ -20,6 +20,7 @@ use crate::mesh::TriMesh;
 use crate::polycube::assembly::occupied_cell_box;
 use crate::polycube::dataset::context_frame;
 use crate::polycube::tensor::BoxFrame;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -92,11 +93,8 @@ pub struct HexOptions {
     /// Use the diffusion correspondence as the seed of the surface map (default true).
     pub use_correspondence: bool,
     pub pillow: bool,
-    /// Passes of mean-ratio untangling / smoothing over all nodes (default 20).
-    pub untangle_passes: usize,
+    /// Passes of mean-ratio smoothing (untangling) over all nodes (default 20).
     pub smooth_iterations: usize,
-    /// Smoothing keeps a move when the local minimum stays >= min(before, floor).
-    pub smooth_floor: f64,
     /// Optimisation visits the nodes of elements below this scaled Jacobian.
     pub optimise_target: f64,
     pub optimise_passes: usize,
@@ -120,9 +118,7 @@ impl Default for HexOptions {
             surface_relax_iterations: 30,
             use_correspondence: true,
             pillow: true,
-            untangle_passes: 20,
-            smooth_iterations: 10,
-            smooth_floor: 0.5,
+            smooth_iterations: 20,
             optimise_target: 0.8,
             optimise_passes: 30,
             hausdorff_samples: 20_000,
@@ -149,9 +145,10 @@ pub struct LevelReport {
     pub level: u32,
     pub nodes: usize,
     pub elements: usize,
-    /// Largest distance between a node of the next level and its linear interpolation
-    /// from this level, relative to the bounding-box diagonal (None when the next
-    /// level was not computed).
+    /// The stopping rule's measure: the largest distance between a boundary midpoint
+    /// linearly interpolated from this level and the input surface on which the next
+    /// level maps it, relative to the bounding-box diagonal (None when the next level
+    /// was not computed).
     pub deviation: Option<f64>,
     pub seconds: f64,
 }
@@ -232,6 +229,11 @@ fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &He
         work.mesh.nodes = before;
         work.attach = before_attach;
     }
+}
+
+/// Target box of a lattice element of spacing `h` (normalised frame) in the working frame.
+fn lattice_target(to_w: &Affine, h: f64) -> [f64; 3] {
+    std::array::from_fn(|a| h * (0..3).map(|i| to_w.m[i][a] * to_w.m[i][a]).sum::<f64>().sqrt())
 }
 
 struct Level {
@@ -343,6 +345,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             bgraph,
             nbr: Default::default(),
             n2e: Default::default(),
+            target: vec![lattice_target(&to_w, frame.scale * h.spacing()); h.mesh.elements.len()],
         };
         let e = topology::edges(&h.mesh);
         work.nbr = topology::node_neighbours(n, &e);
@@ -392,11 +395,14 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
                 if (q_pro.inverted, -q_pro.min) < (q_harm.inverted, -q_harm.min) {
                     work.mesh.nodes = keep;
                 }
-                let rounds = (opts.surface_relax_iterations / (2 * l as usize + 1)).max(2);
-                let f = optimize::fit_to_surface(&mut work, &sw, &bquads, rounds, 0.2);
-                fit_stats.push(f);
                 if l <= 1 {
+                    // the coarse levels define the surface map: fit and spread
+                    let f = optimize::fit_to_surface(&mut work, &sw, &bquads, opts.surface_relax_iterations / 2, 0.2);
+                    fit_stats.push(f);
                     relax_and_refit(&mut work, &sw, &bquads, opts, &mut fit_stats);
+                } else {
+                    // finer levels inherit it: only the interior is evened out
+                    optimize::untangle(&mut work, &sw, 3, |v| role[v] == Role::Interior);
                 }
                 Some(interp)
             }
@@ -407,12 +413,16 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         let rep = LevelReport { level: l, nodes: cur.pos.len(), elements: cur.h.mesh.elements.len(), deviation: None, seconds: t0.elapsed().as_secs_f64() };
         // the stopping rule for the previous level
         if let (Some(pv), Some(interp)) = (prev.as_ref(), interp.as_ref()) {
-            let mut dev: f64 = 0.0;
-            for (v, lat) in cur.h.node_lattice.iter().enumerate() {
-                if lat.iter().any(|c| c % 2 == 1) {
-                    dev = dev.max(norm(sub(cur.pos[v], interp[v])));
-                }
-            }
+            // chord height: how far the linearly interpolated boundary midpoints are from
+            // the surface their mapped counterparts lie on
+            let dev: f64 = cur
+                .h
+                .node_lattice
+                .par_iter()
+                .enumerate()
+                .filter(|(v, lat)| cur.role[*v].on_boundary() && lat.iter().any(|c| c % 2 == 1))
+                .map(|(v, _)| sw.closest(interp[v]).2)
+                .reduce(|| 0.0, f64::max);
             let dev = dev / diag_w;
             let k = levels.len() - 1;
             levels[k].deviation = Some(dev);
@@ -443,6 +453,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         bgraph: Default::default(),
         nbr: Default::default(),
         n2e: Default::default(),
+        target: vec![lattice_target(&to_w, frame.scale * lv.h.spacing()); lv.h.mesh.elements.len()],
     };
     work.rebuild();
     let quad_nrm = |m: &HexMesh, attach: &[u32], quads: &[[u32; 4]]| -> usize {
@@ -488,28 +499,11 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         });
     }
 
-    // ---- untangling / mean-ratio smoothing ----
-    {
-        check_progress(progress, 0.58, "hex: untangling")?;
-        let t0 = Instant::now();
-        let before = summary(&work.mesh);
-        let st = optimize::untangle(&mut work, &sw, opts.untangle_passes, |_| true);
-        stages.push(StageReport {
-            stage: "untangling".into(),
-            before,
-            after: summary(&work.mesh),
-            nodes: work.mesh.nodes.len(),
-            elements: work.mesh.elements.len(),
-            seconds: t0.elapsed().as_secs_f64(),
-            details: serde_json::to_value(st).unwrap_or_default(),
-        });
-    }
-
-    // ---- smoothing ----
+    // ---- smoothing: mean-ratio energy of the corners (untangles, then evens out) ----
     check_progress(progress, 0.6, "hex: smoothing")?;
     let t0 = Instant::now();
     let before = summary(&work.mesh);
-    let st: MoveStats = optimize::smooth(&mut work, &sw, opts.smooth_iterations, opts.smooth_floor);
+    let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
     stages.push(StageReport {
         stage: "smoothing".into(),
         before,
@@ -526,8 +520,8 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     let before = summary(&work.mesh);
     let passes = opts.optimise_passes;
     let mut cancelled = false;
-    let st = optimize::optimise(&mut work, &sw, opts.optimise_target, passes, |p| {
-        let ok = progress.report(0.65 + 0.3 * p as f64 / passes as f64, "hex: optimisation");
+    let mut st = optimize::optimise(&mut work, &sw, opts.optimise_target, passes, |p| {
+        let ok = progress.report(0.65 + 0.2 * p as f64 / passes.max(1) as f64, "hex: optimisation");
         if !ok {
             cancelled = true;
         }
@@ -535,6 +529,16 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     });
     if cancelled {
         return Err(Error::Cancelled("hex: optimisation".into()));
+    }
+    // polish: the mean-ratio energy again, now never below the minimum reached
+    if passes > 0 {
+        check_progress(progress, 0.88, "hex: optimisation")?;
+        let floor = summary(&work.mesh).min;
+        let p = optimize::mean_ratio_smooth(&mut work, &sw, opts.smooth_iterations, Some(floor.max(0.0)), |_| true);
+        let p2 = optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
+        st.passes += p.passes + p2.passes;
+        st.moves_tried += p.moves_tried + p2.moves_tried;
+        st.moves_accepted += p.moves_accepted + p2.moves_accepted;
     }
     let q_final = summary(&work.mesh);
     stages.push(StageReport {
