@@ -264,10 +264,12 @@ pub fn optimise_nodes(
             break;
         }
         st.passes += 1;
-        // active nodes, worst first
+        // active nodes, worst first: the elements in the tail above the current minimum
+        let gmin = quality.iter().copied().fold(f64::INFINITY, f64::min);
+        let threshold = target.min(gmin.max(-1.0) + 0.15);
         let mut node_q = vec![f64::INFINITY; n];
         for (e, el) in w.mesh.elements.iter().enumerate() {
-            if quality[e] < target {
+            if quality[e] < threshold {
                 for &v in el {
                     node_q[v as usize] = node_q[v as usize].min(quality[e]);
                 }

@@ -402,7 +402,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
                     relax_and_refit(&mut work, &sw, &bquads, opts, &mut fit_stats);
                 } else {
                     // finer levels inherit it: only the interior is evened out
-                    optimize::untangle(&mut work, &sw, 3, |v| role[v] == Role::Interior);
+                    optimize::untangle(&mut work, &sw, 3, |_| true);
                 }
                 Some(interp)
             }
