@@ -16,18 +16,23 @@ use std::time::Instant;
 const MODELS: &[(&str, &str, &str)] = &[
     ("cgal_hole.off", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "cube with a square through-hole"),
     ("cinolib_torus.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "torus, hole along the smallest axis"),
-    ("trimesh_round.stl", "THC+X,0,0,0,0,0,0,0,0,0,0,0", "tube, hole along the long axis"),
+    ("trimesh_round.stl", "THC+X,THC+X,THC+X,0,0,0,0,0,0,0,0,0", "thin tube, bore along the long axis"),
     ("cgal_dragknob.off", "BHC+Z,0,0,0,0,0,0,0,0,0,0,0", "knob with a blind recess"),
     ("cgal_spool.off", "BHC+Z,0,0,0,0,0,0,0,0,0,0,0", "spool with a blind recess"),
-    ("cinolib_cube_minus_sphere.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "cube with a spherical bite"),
-    ("mambo_B0.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "block with a channel"),
-    ("hexgen_bust.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "bust"),
+    ("cinolib_cube_minus_sphere.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "cube with a spherical bite (axes kept)"),
+    ("mambo_B0.obj", "cube,cube,0,0,0,0,0,0,0,0,0,0", "block with a channel"),
+    ("hexgen_bust.obj", "cube,cube,0,0,0,0,0,0,0,0,0,0", "bust"),
     ("hexgen_hepta.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "hepta"),
-    ("hexgen_rod.obj", "THC+Z,cube,THC+Z,0,0,0,0,0,0,0,0,0", "rod with two holes"),
-    ("hexgen_joint.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "joint, one hole"),
-    ("hexgen_rockerarm.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "rocker arm, one hole"),
+    ("hexgen_rod.obj", "THC+Z,cube,THC+Y,0,0,0,0,0,0,0,0,0", "rod: eye (Z) and tab hole (Y)"),
+    ("hexgen_joint.obj", "THC+X,THC+X,0,0,0,0,0,0,0,0,0,0", "turned joint with an axial bore"),
+    ("hexgen_rockerarm.obj", "cube,THC+Z,cube,0,0,0,0,0,0,0,0,0", "rocker arm, one hole"),
     ("cgal_pinion.off", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "pinion, axial bore"),
+    ("cgal_eight.off", "THC+Z,THC+Z,0,0,0,0,0,0,0,0,0,0", "double torus"),
+    ("cinolib_3holes.obj", "THC+Z,THC+Z,THC+Z,0,0,0,0,0,0,0,0,0", "three holes"),
 ];
+
+/// Models whose PCA frame is not the polycube's: their own axes are kept (centred, scaled).
+const KEEP_AXES: &[&str] = &["cinolib_cube_minus_sphere.obj"];
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
@@ -59,17 +64,36 @@ fn main() {
     }
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     for (file, labels, _why) in MODELS {
+        let mut labels_override: Option<String> = None;
         if !filters.is_empty() && !filters.iter().any(|f| file.contains(f.as_str())) {
             continue;
         }
         let mesh = TriMesh::load(dir.join(file), &LoadOptions::default()).expect("load");
-        let al = sddpm::geometry::align(&mesh).expect("align");
+        let mut al = sddpm::geometry::align(&mesh).expect("align");
+        if KEEP_AXES.contains(file) {
+            let bb = sddpm::geometry::Aabb::of_points(&mesh.vertices);
+            let s = 2.0 / bb.size().iter().copied().fold(0.0, f64::max);
+            let c = bb.centre();
+            al.transform = sddpm::geometry::Transform { rotation: sddpm::geometry::Transform::IDENTITY.rotation, translation: [-s * c[0], -s * c[1], -s * c[2]], scale: s };
+            al.mesh = al.transform.apply_mesh(&mesh);
+        }
+        if let Ok(l) = std::env::var("HEX_LABELS") {
+            labels_override = Some(l);
+        }
         if info {
             let bb = sddpm::geometry::Aabb::of_points(&al.mesh.vertices);
             println!("{file}: {} v {} t aligned size {:?}", mesh.vertices.len(), mesh.triangles.len(), bb.size());
+            if let Some(o) = &out {
+                std::fs::create_dir_all(o).unwrap();
+                let stem = file.split('.').next().unwrap();
+                for (k, v) in [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, -0.6, 0.8]].iter().enumerate() {
+                    let up = if k == 0 { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+                    render_tri(&al.mesh, *v, up, &o.join(format!("{stem}_input{k}.png")));
+                }
+            }
             continue;
         }
-        let ctx = Context::parse(labels).expect("context");
+        let ctx = Context::parse(labels_override.as_deref().unwrap_or(labels)).expect("context");
         let (input, _) = HexInput::from_alignment(&al, ctx).expect("input");
         let t0 = Instant::now();
         let r = match build_hex_mesh(&input, &opts, &mut sddpm::error::NoProgress) {
@@ -172,18 +196,32 @@ fn main() {
 }
 
 /// Orthographic render of the boundary quads of a hex mesh (painter's algorithm),
-/// quads facing away from the viewer skipped, inverted elements' faces in red.
+/// inverted elements' faces in red, faces seen from behind in blue.
 #[allow(dead_code)]
 pub fn render(m: &sddpm::hex::HexMesh, view: [f64; 3], up: [f64; 3], path: &std::path::Path) {
-    use plotters::prelude::*;
-    use sddpm::geometry::vec3::*;
     let quads = sddpm::hex::topology::boundary_quads(m).unwrap();
     let q = sddpm::hex::quality::element_qualities(m);
+    let polys: Vec<(Vec<[f64; 3]>, bool)> =
+        quads.iter().map(|bq| (bq.nodes.iter().map(|&i| m.nodes[i as usize]).collect(), q[bq.element as usize] <= 0.0)).collect();
+    render_polys(&polys, view, up, path);
+}
+
+/// Render a triangle surface the same way.
+#[allow(dead_code)]
+pub fn render_tri(t: &TriMesh, view: [f64; 3], up: [f64; 3], path: &std::path::Path) {
+    let polys: Vec<(Vec<[f64; 3]>, bool)> = t.triangles.iter().map(|tr| (tr.iter().map(|&i| t.vertices[i as usize]).collect(), false)).collect();
+    render_polys(&polys, view, up, path);
+}
+
+fn render_polys(polys: &[(Vec<[f64; 3]>, bool)], view: [f64; 3], up: [f64; 3], path: &std::path::Path) {
+    use plotters::prelude::*;
+    use sddpm::geometry::vec3::*;
     let vz = scale(view, 1.0 / norm(view));
     let vx0 = cross(up, vz);
     let vx = scale(vx0, 1.0 / norm(vx0));
     let vy = cross(vz, vx);
-    let bb = sddpm::geometry::Aabb::of_points(&m.nodes);
+    let all: Vec<[f64; 3]> = polys.iter().flat_map(|p| p.0.iter().copied()).collect();
+    let bb = sddpm::geometry::Aabb::of_points(&all);
     let c = bb.centre();
     let r = bb.diagonal() / 2.0;
     let (w, h) = (900i32, 900i32);
@@ -192,25 +230,26 @@ pub fn render(m: &sddpm::hex::HexMesh, view: [f64; 3], up: [f64; 3], path: &std:
         ((w as f64 / 2.0 + dot(d, vx) / r * 430.0) as i32, (h as f64 / 2.0 - dot(d, vy) / r * 430.0) as i32, dot(d, vz))
     };
     let mut items: Vec<(f64, Vec<(i32, i32)>, RGBColor)> = Vec::new();
-    for bq in &quads {
-        let p = bq.nodes.map(|i| m.nodes[i as usize]);
-        let n = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+    for (p, bad) in polys {
+        let n = cross(sub(p[1], p[0]), sub(p[p.len() - 1], p[0]));
         let facing = dot(n, vz);
         let pts: Vec<(i32, i32)> = p.iter().map(|&x| (proj(x).0, proj(x).1)).collect();
-        let depth = p.iter().map(|&x| proj(x).2).sum::<f64>() / 4.0;
-        let bad = q[bq.element as usize] <= 0.0;
+        let depth = p.iter().map(|&x| proj(x).2).sum::<f64>() / p.len() as f64;
         let shade = (60.0 + 180.0 * (facing / norm(n).max(1e-300)).abs()) as u8;
-        let col = if bad { RGBColor(230, 30, 30) } else if facing < 0.0 { RGBColor(40, 40, 120) } else { RGBColor(shade, shade, shade) };
+        let col = if *bad { RGBColor(230, 30, 30) } else if facing < 0.0 { RGBColor(40, 40, 120) } else { RGBColor(shade, shade, shade) };
         items.push((depth, pts, col));
     }
     items.sort_by(|a, b| a.0.total_cmp(&b.0));
     let root = BitMapBackend::new(path, (w as u32, h as u32)).into_drawing_area();
     root.fill(&WHITE).unwrap();
+    let edges = polys.len() < 60_000;
     for (_, pts, col) in items.iter() {
         root.draw(&Polygon::new(pts.clone(), col.filled())).unwrap();
-        let mut closed = pts.clone();
-        closed.push(pts[0]);
-        root.draw(&PathElement::new(closed, BLACK.stroke_width(1))).unwrap();
+        if edges {
+            let mut closed = pts.clone();
+            closed.push(pts[0]);
+            root.draw(&PathElement::new(closed, BLACK.stroke_width(1))).unwrap();
+        }
     }
     root.present().unwrap();
 }

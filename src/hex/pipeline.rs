@@ -9,7 +9,7 @@ use super::map::{self, Correspondence, FeatureMatch, Role};
 use super::optimize::{self, MoveStats, Work};
 use super::pillow::{pillow, PillowReport};
 use super::quality::{element_qualities, histogram, summarize, QualitySummary};
-use super::surface::{detect_features, Surface};
+use super::surface::{detect_features, prune_features, Surface};
 use super::topology::{self, mesh_volume};
 use super::HexMesh;
 use crate::context::Context;
@@ -75,7 +75,7 @@ impl HexInput {
 pub struct HexOptions {
     /// Fix the subdivision level instead of choosing it by the stopping rule.
     pub level: Option<u32>,
-    /// Smallest level the stopping rule may choose (default 1).
+    /// Smallest level the stopping rule may choose (default 2).
     pub min_level: u32,
     /// Largest level (default 4).
     pub max_level: u32,
@@ -84,14 +84,20 @@ pub struct HexOptions {
     pub threshold: f64,
     /// The level is capped so that the mesh has at most this many elements before pillowing (default 400 000).
     pub max_elements: usize,
-    /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 35).
+    /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
     pub feature_angle: f64,
+    /// Feature curves shorter than this fraction of the bounding-box diagonal are
+    /// ignored (default 0.03).
+    pub min_feature_length: f64,
     /// Turning angle (degrees) that makes a feature-curve vertex a corner (default 45).
     pub corner_angle: f64,
     /// Relaxation iterations of the surface map on level 0 (later levels use a third).
     pub surface_relax_iterations: usize,
     /// Use the diffusion correspondence as the seed of the surface map (default true).
     pub use_correspondence: bool,
+    /// Without a correspondence, fit the polycube's sub-voxel planes to the input
+    /// before mapping (default true).
+    pub fit_planes: bool,
     pub pillow: bool,
     /// Passes of mean-ratio smoothing (untangling) over all nodes (default 20).
     pub smooth_iterations: usize,
@@ -109,14 +115,16 @@ impl Default for HexOptions {
     fn default() -> Self {
         HexOptions {
             level: None,
-            min_level: 1,
+            min_level: 2,
             max_level: 4,
             threshold: 0.004,
             max_elements: 400_000,
-            feature_angle: 35.0,
+            feature_angle: 40.0,
+            min_feature_length: 0.03,
             corner_angle: 45.0,
             surface_relax_iterations: 30,
             use_correspondence: true,
+            fit_planes: true,
             pillow: true,
             smooth_iterations: 20,
             optimise_target: 0.8,
@@ -161,6 +169,9 @@ pub struct SurfaceMapReport {
     pub matched_corners: usize,
     pub matched_chains: usize,
     pub correspondence_pairs: usize,
+    /// Sub-voxel planes moved towards the input before mapping, and the largest move (normalised units).
+    pub planes_fitted: usize,
+    pub max_plane_shift: f64,
     /// Boundary quads of the mapped mesh whose normal opposes the surface normal.
     pub flipped_quads: usize,
 }
@@ -231,9 +242,17 @@ fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &He
     }
 }
 
-/// Target box of a lattice element of spacing `h` (normalised frame) in the working frame.
-fn lattice_target(to_w: &Affine, h: f64) -> [f64; 3] {
-    std::array::from_fn(|a| h * (0..3).map(|i| to_w.m[i][a] * to_w.m[i][a]).sum::<f64>().sqrt())
+/// Target boxes of the elements of a lattice mesh: their start shape (the warped
+/// lattice) in the working frame, as edge lengths along the element axes.
+fn element_targets(h: &LatticeHex, warp: &map::Warp, to_w: &Affine) -> Vec<[f64; 3]> {
+    let col: [f64; 3] = std::array::from_fn(|a| (0..3).map(|i| to_w.m[i][a] * to_w.m[i][a]).sum::<f64>().sqrt());
+    h.elem_lattice
+        .iter()
+        .map(|&c| {
+            let ext = warp.element_extent(c, h.subdiv);
+            std::array::from_fn(|a| (ext[a] * col[a]).max(1e-12))
+        })
+        .collect()
 }
 
 struct Level {
@@ -302,15 +321,26 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     let w_to_u = u_to_w.inverse().expect("similarity");
     let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
     let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
+    let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
+    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0);
     let sn = Surface::new(mesh_n, features.clone());
     let sw = Surface::new(mesh_w, features);
     let diag_w = sw.bbox.diagonal();
     let corr = if opts.use_correspondence { Correspondence::new(&input.correspondence) } else { None };
 
     // ---- levels ----
+    // start embedding of the polycube: its sub-voxel planes fitted to the input
+    // (or the uniform lattice when the correspondence seeds the map)
+    let (warp, warp_report) = if opts.fit_planes && corr.is_none() {
+        let h0 = lattice_hex(&grid, 0);
+        let cells = occupied_cell_box(&input.context.labels).expect("occupied");
+        map::fit_warp(&h0, &frame, cells, &sn)
+    } else {
+        (map::Warp::uniform(&frame), map::WarpReport::default())
+    };
     // features are matched on level 1, where every polycube edge has an inner node
     let h1 = lattice_hex(&grid, 1);
-    let pos_n1: Vec<[f64; 3]> = h1.mesh.nodes.iter().map(|&g| frame.to_normalised(g)).collect();
+    let pos_n1: Vec<[f64; 3]> = h1.mesh.nodes.iter().map(|&g| warp.apply(g)).collect();
     let radius = 0.5 * frame.scale / 3.0;
     let fm: FeatureMatch = map::match_features(&h1, &pos_n1, &sn, radius);
     drop(h1);
@@ -320,6 +350,8 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         matched_corners: fm.corners.len(),
         matched_chains: fm.chains.len(),
         correspondence_pairs: corr.as_ref().map(|_| input.correspondence.len()).unwrap_or(0),
+        planes_fitted: warp_report.planes_fitted,
+        max_plane_shift: warp_report.max_shift,
         flipped_quads: 0,
     };
     let max_level = opts.level.unwrap_or(opts.max_level);
@@ -345,7 +377,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             bgraph,
             nbr: Default::default(),
             n2e: Default::default(),
-            target: vec![lattice_target(&to_w, frame.scale * h.spacing()); h.mesh.elements.len()],
+            target: element_targets(&h, &warp, &to_w),
         };
         let e = topology::edges(&h.mesh);
         work.nbr = topology::node_neighbours(n, &e);
@@ -357,10 +389,12 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
                     .mesh
                     .nodes
                     .iter()
-                    .map(|&g| {
-                        let u = frame.to_normalised(g);
-                        let d = corr.as_ref().map(|c| c.displacement(u, 8)).unwrap_or([0.0; 3]);
-                        to_w.apply(add(u, d))
+                    .map(|&g| match corr.as_ref() {
+                        Some(c) => {
+                            let u = frame.to_normalised(g);
+                            to_w.apply(add(u, c.displacement(u, 8)))
+                        }
+                        None => to_w.apply(warp.apply(g)),
                     })
                     .collect();
                 let _ = &masks;
@@ -453,7 +487,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         bgraph: Default::default(),
         nbr: Default::default(),
         n2e: Default::default(),
-        target: vec![lattice_target(&to_w, frame.scale * lv.h.spacing()); lv.h.mesh.elements.len()],
+        target: element_targets(&lv.h, &warp, &to_w),
     };
     work.rebuild();
     let quad_nrm = |m: &HexMesh, attach: &[u32], quads: &[[u32; 4]]| -> usize {

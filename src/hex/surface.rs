@@ -130,6 +130,25 @@ pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Feature
     Features { curves, corners }
 }
 
+/// Drop feature curves shorter than `min_length` (noise of coarse or organic
+/// tessellations) and keep as corners only the vertices where at least three kept
+/// curves end, or two kept curves meet at a turn.
+pub fn prune_features(mesh: &TriMesh, f: Features, min_length: f64) -> Features {
+    let len = |c: &Curve| {
+        let n = c.vertices.len();
+        let segs = if c.closed { n } else { n - 1 };
+        (0..segs).map(|k| norm(sub(mesh.vertices[c.vertices[(k + 1) % n] as usize], mesh.vertices[c.vertices[k] as usize]))).sum::<f64>()
+    };
+    let curves: Vec<Curve> = f.curves.into_iter().filter(|c| len(c) >= min_length).collect();
+    let mut ends: HashMap<u32, usize> = HashMap::new();
+    for c in curves.iter().filter(|c| !c.closed) {
+        *ends.entry(c.vertices[0]).or_default() += 1;
+        *ends.entry(*c.vertices.last().unwrap()).or_default() += 1;
+    }
+    let corners = f.corners.into_iter().filter(|v| ends.get(v).copied().unwrap_or(0) >= 2).collect();
+    Features { curves, corners }
+}
+
 /// A point on a feature curve: segment index and parameter in [0, 1] along it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurvePoint {
@@ -296,5 +315,40 @@ mod tests {
         assert!((d - 1.0).abs() < 1e-12 && q[2].abs() < 1e-12);
         let (q, _, _) = s.closest_facing([0.5, 1.0, 0.1], [0.0, -1.0, 0.0], 0.5);
         assert!(q[1].abs() < 1e-12);
+    }
+}
+
+impl Surface {
+    /// Intersections of the line `origin + t * e_axis` (t in [-reach, reach]) with the
+    /// surface: (t, triangle) for every crossed triangle.
+    pub fn axis_line_hits(&self, origin: [f64; 3], axis: usize, reach: f64) -> Vec<(f64, u32)> {
+        let mut lo = origin;
+        let mut hi = origin;
+        lo[axis] -= reach;
+        hi[axis] += reach;
+        let bb = Aabb { min: lo, max: hi };
+        let mut out = Vec::new();
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        self.bvh.for_each_overlap(&bb, |tri_id| {
+            let [a, b, c] = self.tri(tri_id);
+            // 2D point-in-triangle in the (u, v) plane, then the axis coordinate
+            let d = (b[u] - a[u]) * (c[v] - a[v]) - (c[u] - a[u]) * (b[v] - a[v]);
+            if d.abs() < 1e-300 {
+                return;
+            }
+            let (pu, pv) = (origin[u] - a[u], origin[v] - a[v]);
+            let l1 = (pu * (c[v] - a[v]) - pv * (c[u] - a[u])) / d;
+            let l2 = ((b[u] - a[u]) * pv - (b[v] - a[v]) * pu) / d;
+            let l0 = 1.0 - l1 - l2;
+            if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
+                return;
+            }
+            let x = l0 * a[axis] + l1 * b[axis] + l2 * c[axis];
+            let t = x - origin[axis];
+            if t.abs() <= reach {
+                out.push((t, tri_id));
+            }
+        });
+        out
     }
 }
