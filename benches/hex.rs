@@ -35,10 +35,17 @@ const MODELS: &[(&str, &str, &str)] = &[
 const KEEP_AXES: &[&str] = &["cinolib_cube_minus_sphere.obj"];
 
 fn main() {
+    run();
+}
+
+fn run() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
     let mut filters = Vec::new();
     let mut opts = HexOptions::default();
     let mut info = false;
+    let mut reference = false;
+    let mut levels: Option<String> = None;
+    let mut table: Vec<String> = Vec::new();
     let mut out: Option<PathBuf> = None;
     let mut i = 0;
     while i < args.len() {
@@ -52,6 +59,11 @@ fn main() {
                 i += 1;
             }
             "--info" => info = true,
+            "--reference" => reference = true,
+            "--levels" => {
+                levels = Some(args[i + 1].clone());
+                i += 1;
+            }
             "--raw" => opts.keep_better_mapped = false,
             "--no-pillow" => opts.pillow = false,
             "--no-quality" => {
@@ -93,7 +105,54 @@ fn main() {
             }
             continue;
         }
+        if reference {
+            let stem = file.split('.').next().unwrap();
+            let p = dir.join("reference_hex").join(format!("{stem}_hex.vtk"));
+            if let Ok(h) = sddpm::export::vtk::read_vtk_legacy(&p) {
+                let q = sddpm::hex::quality::summarize(&sddpm::hex::quality::element_qualities(&h));
+                let hd = sddpm::hex::distance::hausdorff(&h, &mesh, 20_000);
+                table.push(format!(
+                    "| {stem} (HexGen) | {} | {} | {:.3} | {:.3} | {} | {:.2} % |",
+                    h.nodes.len(),
+                    h.elements.len(),
+                    q.min,
+                    q.mean,
+                    q.inverted,
+                    100.0 * hd.relative
+                ));
+            }
+            continue;
+        }
         let ctx = Context::parse(labels_override.as_deref().unwrap_or(labels)).expect("context");
+        if let Some(spec) = &levels {
+            let (a, b) = spec.split_once('-').map(|(a, b)| (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())).unwrap_or((1, 4));
+            for l in a..=b {
+                let (input, _) = HexInput::from_alignment(&al, ctx).expect("input");
+                let o = HexOptions { level: Some(l), ..opts.clone() };
+                let t0 = Instant::now();
+                let r = build_hex_mesh(&input, &o, &mut sddpm::error::NoProgress).expect("hex");
+                let total = t0.elapsed().as_secs_f64();
+                let st = |name: &str| r.stages.iter().find(|s| s.stage == name).map(|s| s.seconds).unwrap_or(0.0);
+                table.push(format!(
+                    "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {:.3} | {:.3} | {:.2} % |",
+                    file.split('.').next().unwrap(),
+                    l,
+                    r.mesh.nodes.len(),
+                    r.mesh.elements.len(),
+                    st("mapping"),
+                    st("pillowing"),
+                    st("smoothing"),
+                    st("optimisation"),
+                    total - r.stages.iter().map(|s| s.seconds).sum::<f64>(),
+                    total,
+                    r.quality.min,
+                    r.quality.mean,
+                    100.0 * r.hausdorff_relative
+                ));
+                println!("{}", table.last().unwrap());
+            }
+            continue;
+        }
         let (input, _) = HexInput::from_alignment(&al, ctx).expect("input");
         let t0 = Instant::now();
         let r = match build_hex_mesh(&input, &opts, &mut sddpm::error::NoProgress) {
@@ -104,6 +163,27 @@ fn main() {
             }
         };
         let secs = t0.elapsed().as_secs_f64();
+        let st = |name: &str| r.stages.iter().find(|s| s.stage == name).map(|s| s.seconds).unwrap_or(0.0);
+        table.push(format!(
+            "| {} | {} | {} / {} | {} | {} / {} | {:.3} | {:.3} | {} | {:.2} % | {:.2} % | {:.2} / {:.2} / {:.2} / {:.2} | {:.1} |",
+            file.split('.').next().unwrap(),
+            labels_override.as_deref().unwrap_or(labels),
+            mesh.vertices.len(),
+            mesh.triangles.len(),
+            r.level,
+            r.mesh.nodes.len(),
+            r.mesh.elements.len(),
+            r.quality.min,
+            r.quality.mean,
+            r.quality.inverted,
+            100.0 * r.hausdorff_relative,
+            100.0 * (r.volume - r.input_volume) / r.input_volume,
+            st("mapping"),
+            st("pillowing"),
+            st("smoothing"),
+            st("optimisation"),
+            secs
+        ));
         println!(
             "{file}: level {} nodes {} elements {} minSJ {:.3} meanSJ {:.3} inverted {} hausdorff {:.4} vol {:.4} ({:.4}) returned {} {:.1}s",
             r.level,
@@ -192,6 +272,10 @@ fn main() {
                 render(&r.mesh, *v, *u, &o.join(format!("{stem}_final{k}.png")));
             }
         }
+    }
+    println!();
+    for l in &table {
+        println!("{l}");
     }
 }
 

@@ -345,6 +345,10 @@ pub fn optimise_nodes(
     st
 }
 
+/// Smallest cosine between the mesh boundary normal and the normal of the triangle a
+/// boundary node is pulled to.
+pub const FIT_FACING: f64 = 0.3;
+
 /// What fitting did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct FitStats {
@@ -382,7 +386,7 @@ pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: u
                 Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
                 Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
                 Role::Free => {
-                    let (q, t, _) = sw.closest_facing(x, nrm[v], 0.0);
+                    let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
                     (q, t)
                 }
                 Role::Interior => continue,
@@ -428,7 +432,7 @@ pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: u
             Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
             Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
             Role::Free => {
-                let (q, t, _) = sw.closest_facing(x, nrm[v], 0.0);
+                let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
                 (q, t)
             }
             Role::Interior => continue,
