@@ -8,7 +8,9 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
+pub mod pipeline;
 pub mod polycube;
+pub mod verify;
 
 pub use error::{Error, Result, Status};
 pub mod export;

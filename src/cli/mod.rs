@@ -3,7 +3,12 @@
 
 use clap::{Parser, Subcommand};
 
+mod common;
+mod context;
+mod dataset;
+mod evalmodel;
 mod info;
+mod polycube;
 mod train;
 
 /// Exit code for bad input (DESIGN.md).
@@ -20,6 +25,15 @@ pub struct Cli {
 pub enum Command {
     /// Read a mesh, print what was measured, exit 2 if it cannot go on to meshing.
     Info(info::InfoArgs),
+    /// Encode a context: one-hot vector, assembled genus, validity and the reason.
+    Context(context::ContextArgs),
+    /// Write the training set (tensors, contexts, a few assemblies as OBJ).
+    Dataset(dataset::DatasetArgs),
+    /// Generate and verify a polycube for a mesh (user-guided or automated).
+    Polycube(polycube::PolycubeArgs),
+    /// Measure a model on held-in synthetic inputs (developer command).
+    #[command(name = "eval-model")]
+    EvalModel(evalmodel::EvalArgs),
     /// Train the diffusion model (checkpoints every epoch; --resume continues).
     Train(train::TrainArgs),
 }
@@ -35,6 +49,10 @@ pub fn run() -> i32 {
     };
     match cli.command {
         Command::Info(args) => info::run(&args),
+        Command::Context(args) => context::run(&args).unwrap_or_else(fail),
+        Command::Dataset(args) => dataset::run(&args).unwrap_or_else(fail),
+        Command::Polycube(args) => polycube::run(&args).unwrap_or_else(fail),
+        Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }
 }

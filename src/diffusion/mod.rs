@@ -5,6 +5,7 @@
 //! pure-Rust `flex` CPU backend by default, burn-ndarray behind the `ndarray` cargo
 //! feature, and GPU backends behind `wgpu` / `cuda`.
 
+pub mod eval;
 pub mod model;
 pub mod sample;
 pub mod schedule;

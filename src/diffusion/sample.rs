@@ -1,5 +1,11 @@
 //! Reverse diffusion from the input geometry, batched over candidate contexts.
 //!
+//! Null cells are known: their x_0 is 512 copies of (0, 0, 0). After every step
+//! their blocks are replaced by a fresh forward sample of that known x_0 at the new
+//! timestep (conditioning by replacement, as in inpainting), and by exact zeros at
+//! the end; the network therefore always sees null blocks as it saw them in
+//! training, and the output's null cells are exactly the placeholders of DESIGN.md.
+//!
 //! Two samplers share one loop: the full ancestral sampler of DESIGN.md (all T
 //! steps, noise sigma_t^2 = b_t) and a strided deterministic sampler (DDIM on the
 //! mean-shifted variable) with fewer network evaluations. Every candidate has its
@@ -11,7 +17,8 @@ use crate::context::Context;
 use crate::error::{check_progress, Error, Progress, Result};
 use crate::polycube::dataset::item_rng;
 use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
-use crate::polycube::CONTEXT_DIM;
+use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL};
+use crate::polycube::{Primitive, CONTEXT_DIM, NUM_CELLS};
 use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -28,16 +35,23 @@ pub struct SamplerOptions {
     pub keep_every: usize,
     /// Candidates per network call.
     pub max_batch: usize,
+    /// The step the reverse process starts from (0 = T). The input geometry enters as
+    /// the x_0 of the forward process at that step: x'_start = sqrt(ab) x_in +
+    /// sqrt(1 - ab) z + Q q, so the network sees the kind of state it was trained on.
+    pub start_step: usize,
+    /// Use the raw input geometry as x'_T without forward noising (DESIGN.md's literal
+    /// reading; measured to be worse, see BENCHMARKS.md).
+    pub raw_start: bool,
 }
 
 impl Default for SamplerOptions {
     fn default() -> Self {
-        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16 }
+        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16, start_step: 0, raw_start: false }
     }
 }
 
 /// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
-pub const DEFAULT_STEPS: usize = 0;
+pub const DEFAULT_STEPS: usize = 50;
 
 /// Output of a batch: one [3, 64, 96] tensor per candidate, and the kept states.
 #[derive(Debug, Clone, Default)]
@@ -47,7 +61,8 @@ pub struct SampleOutput {
     pub trajectory: Vec<Vec<(usize, Vec<f32>)>>,
 }
 
-/// The timesteps the sampler visits: T, ..., 1 (full) or an evenly strided subset.
+/// The timesteps the sampler visits from `t_max` down: t_max, ..., 1 (full) or an
+/// evenly strided subset of `steps` of them.
 pub fn timesteps(t_max: usize, steps: usize) -> Vec<usize> {
     if steps == 0 || steps >= t_max {
         return (1..=t_max).rev().collect();
@@ -84,8 +99,9 @@ pub fn reverse_diffusion(
     let n = inputs.len();
     let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;
-    let ts = timesteps(sched.steps(), opts.steps);
-    let ancestral = ts.len() == sched.steps();
+    let t_start = if opts.start_step == 0 { sched.steps() } else { opts.start_step.min(sched.steps()) };
+    let ts = timesteps(t_start, opts.steps);
+    let ancestral = ts.len() == t_start;
     let batch = opts.max_batch.max(1);
     let total_calls = n.div_ceil(batch) * ts.len();
     let mut calls = 0usize;
@@ -94,11 +110,22 @@ pub fn reverse_diffusion(
         let b = end - start;
         let mut x: Vec<f32> = inputs[start..end].concat();
         let mut rngs: Vec<_> = (start..end).map(|i| item_rng(opts.seed, i as u64)).collect();
+        if !opts.raw_start {
+            let mut z = vec![0f32; TENSOR_LEN];
+            for i in 0..b {
+                for v in z.iter_mut() {
+                    *v = StandardNormal.sample(&mut rngs[i]);
+                }
+                let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;
+                let x_in = x[r.clone()].to_vec();
+                sched.forward_sample(&x_in, &z, t_start, &mut x[r]);
+            }
+        }
         let ctx: Vec<f32> = contexts[start..end].iter().flat_map(|c| c.one_hot()).collect();
         let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &model.device);
         if opts.keep_every > 0 {
             for i in 0..b {
-                out.trajectory[start + i].push((sched.steps(), x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                out.trajectory[start + i].push((t_start, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
             }
         }
         let mut next = vec![0f32; x.len()];
@@ -126,6 +153,26 @@ pub fn reverse_diffusion(
                     sched.reverse_step(&x[r.clone()], &eps[r.clone()], t, noise, &mut next[r.clone()]);
                 } else {
                     sched.ddim_step(&x[r.clone()], &eps[r.clone()], t, s, &mut next[r.clone()]);
+                }
+            }
+            // Known null blocks: a forward sample of x_0 = 0 at the new timestep s.
+            for i in 0..b {
+                let ctx = &contexts[start + i];
+                let base = i * TENSOR_LEN;
+                let (sd, shift) = ((1.0 - sched.alpha_bar[s]).sqrt(), sched.qcoef[s]);
+                for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
+                    for p in 0..POINTS_PER_CELL {
+                        let (r, col) = slot(n, p);
+                        for ch in 0..3 {
+                            let v = if s == 0 {
+                                0.0
+                            } else {
+                                let zv: f64 = StandardNormal.sample(&mut rngs[i]);
+                                sd * zv + shift * sched.config.q[ch]
+                            };
+                            next[base + flat(ch, r, col)] = v as f32;
+                        }
+                    }
                 }
             }
             std::mem::swap(&mut x, &mut next);

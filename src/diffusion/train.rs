@@ -39,6 +39,9 @@ pub struct TrainConfig {
     pub log_every: usize,
     /// Use only the first n samples (for quick tests); None = the whole set.
     pub limit_samples: Option<usize>,
+    /// Average the loss over occupied cells only (null cells are known and held by
+    /// replacement in the sampler, so the network need not learn them).
+    pub mask_null_cells: bool,
     pub dataset: DatasetConfig,
     pub model: ModelConfig,
     pub schedule: ScheduleConfig,
@@ -54,6 +57,7 @@ impl Default for TrainConfig {
             seed: 42,
             log_every: 25,
             limit_samples: None,
+            mask_null_cells: true,
             dataset: DatasetConfig::default(),
             model: ModelConfig::default(),
             schedule: ScheduleConfig::default(),
@@ -209,7 +213,14 @@ fn train_loop(
             let zt = Tensor::<4>::from_data(TensorData::new(z, [b, 3, TENSOR_H, TENSOR_W]), &ad);
             let ct = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &ad);
             let pred = net.forward(xt, &ts, ct);
-            let loss = (pred - zt).powi_scalar(2).mean();
+            let loss = if cfg.mask_null_cells {
+                let mask = occupied_mask(chunk.iter().map(|&i| &data[i].context));
+                let count = mask.iter().filter(|&&m| m > 0.0).count().max(1) as f32 * 3.0;
+                let mt = Tensor::<4>::from_data(TensorData::new(mask, [b, 1, TENSOR_H, TENSOR_W]), &ad);
+                ((pred - zt).powi_scalar(2) * mt).sum().div_scalar(count)
+            } else {
+                (pred - zt).powi_scalar(2).mean()
+            };
             let lv: f32 = loss.clone().into_scalar();
             if !lv.is_finite() {
                 return Err(Error::Model(format!("training diverged at step {} (loss {lv})", *step)));
@@ -254,6 +265,23 @@ fn train_loop(
         }
     }
     Ok(meta)
+}
+
+/// 1 on the pixels of occupied cells, 0 on null cells: [B, 1, 64, 96].
+fn occupied_mask<'a>(ctxs: impl Iterator<Item = &'a crate::context::Context>) -> Vec<f32> {
+    use crate::polycube::tensor::{slot, POINTS_PER_CELL};
+    let mut out = Vec::new();
+    for c in ctxs {
+        let mut m = vec![0f32; TENSOR_H * TENSOR_W];
+        for n in c.occupied() {
+            for p in 0..POINTS_PER_CELL {
+                let (r, col) = slot(n, p);
+                m[r * TENSOR_W + col] = 1.0;
+            }
+        }
+        out.extend(m);
+    }
+    out
 }
 
 fn meta_for(cfg: &TrainConfig, epochs: usize, steps: usize, loss: f64, seconds: f64) -> WeightsMeta {

@@ -1,4 +1,5 @@
 //! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
 
+pub mod obj;
 pub mod vtk;
 pub mod hexfmt;

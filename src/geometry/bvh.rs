@@ -19,6 +19,7 @@ impl Aabb {
         points.iter().fold(Aabb::EMPTY, |b, p| b.grow(*p))
     }
 
+    #[allow(clippy::needless_range_loop)]
     pub fn grow(mut self, p: [f64; 3]) -> Aabb {
         for k in 0..3 {
             self.min[k] = self.min[k].min(p[k]);
@@ -233,7 +234,7 @@ pub fn closest_point_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64;
         return (add(b, scale(sub(c, b), w)), [0.0, 1.0 - w, w]);
     }
     let denom = va + vb + vc;
-    if !(denom.abs() > 0.0) {
+    if denom == 0.0 || denom.is_nan() {
         // degenerate triangle: fall back to its corners
         let best = [(a, [1.0, 0.0, 0.0]), (b, [0.0, 1.0, 0.0]), (c, [0.0, 0.0, 1.0])]
             .into_iter()

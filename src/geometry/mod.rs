@@ -19,6 +19,7 @@
 //!    scaled so that the longest bounding-box edge is 2.
 
 pub mod bvh;
+pub mod orient;
 pub mod vec3;
 
 pub use bvh::{closest_point_on_triangle, Aabb, Bvh, ClosestPoint, SurfaceLocator};
@@ -149,7 +150,7 @@ pub struct Alignment {
 /// Principal axes (rows: X, Y, Z) with the deterministic order and signs described in the module docs.
 pub fn principal_axes(mesh: &TriMesh) -> Result<([[f64; 3]; 3], [f64; 3], SurfaceMoments)> {
     let mom = surface_moments(mesh);
-    if !(mom.area > 0.0) || !mom.area.is_finite() {
+    if !mom.area.is_finite() || mom.area <= 0.0 {
         return Err(Error::InvalidMesh(format!("cannot align a surface of area {}", mom.area)));
     }
     let c = mom.covariance;
@@ -219,7 +220,7 @@ pub fn align(mesh: &TriMesh) -> Result<Alignment> {
     let bb = Aabb::of_points(&rotated);
     let size = bb.size();
     let longest = size[0].max(size[1]).max(size[2]);
-    if !(longest > 0.0) || !longest.is_finite() {
+    if !longest.is_finite() || longest <= 0.0 {
         return Err(Error::InvalidMesh(format!("cannot normalise a surface whose bounding box has longest edge {longest}")));
     }
     let s = 2.0 / longest;
@@ -257,7 +258,7 @@ pub fn sample_surface<R: rand::Rng + ?Sized>(mesh: &TriMesh, n: usize, rng: &mut
         total += 0.5 * norm(tri_normal(a, b, c));
         cum.push(total);
     }
-    if !(total > 0.0) || !total.is_finite() {
+    if !total.is_finite() || total <= 0.0 {
         return Vec::new();
     }
     (0..n)

@@ -5,6 +5,7 @@
 use super::TriMesh;
 use crate::error::Error;
 use crate::geometry::vec3::{cross, dot, norm, sub};
+use crate::geometry::Aabb;
 use serde::Serialize;
 
 /// Triangles whose area is below this times their longest edge squared are degenerate.
@@ -187,26 +188,6 @@ impl UnionFind {
     }
 }
 
-pub(crate) fn bbox(vertices: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in vertices {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (lo, hi)
-}
-
-pub(crate) fn bbox_diagonal(vertices: &[[f64; 3]]) -> f64 {
-    if vertices.is_empty() {
-        return 0.0;
-    }
-    let (lo, hi) = bbox(vertices);
-    ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
-}
-
 /// Signed volume of the tetrahedron (origin, a, b, c) for triangle t, origin at 0.
 pub(crate) fn signed_volume_of(mesh: &TriMesh, t: usize) -> f64 {
     let [a, b, c] = mesh.triangles[t].map(|v| mesh.vertices[v as usize]);
@@ -382,7 +363,7 @@ pub(crate) fn check(mesh: &TriMesh) -> MeshReport {
     // --- vertex manifoldness: fans of triangles around each vertex, joined through shared edges
     let mut vt_start = vec![0usize; nv + 1];
     for t in 0..nt {
-        if valid_tri(t) && !collapsed.binary_search(&t).is_ok() {
+        if valid_tri(t) && collapsed.binary_search(&t).is_err() {
             for &v in &mesh.triangles[t] {
                 vt_start[v as usize + 1] += 1;
             }
@@ -394,7 +375,7 @@ pub(crate) fn check(mesh: &TriMesh) -> MeshReport {
     let mut vt = vec![0u32; vt_start[nv]];
     let mut fill = vt_start.clone();
     for t in 0..nt {
-        if valid_tri(t) && !collapsed.binary_search(&t).is_ok() {
+        if valid_tri(t) && collapsed.binary_search(&t).is_err() {
             for &v in &mesh.triangles[t] {
                 vt[fill[v as usize]] = t as u32;
                 fill[v as usize] += 1;
@@ -493,7 +474,8 @@ pub(crate) fn check(mesh: &TriMesh) -> MeshReport {
 
     // --- measures (relative to the bounding-box centre for accuracy)
     let (bmin, bmax) = if n_ref > 0 {
-        bbox(&(0..nv).filter(|&v| referenced[v]).map(|v| mesh.vertices[v]).collect::<Vec<_>>())
+        let bb = (0..nv).filter(|&v| referenced[v]).fold(Aabb::EMPTY, |b, v| b.grow(mesh.vertices[v]));
+        (bb.min, bb.max)
     } else {
         ([f64::NAN; 3], [f64::NAN; 3])
     };
@@ -555,7 +537,7 @@ pub(crate) fn check(mesh: &TriMesh) -> MeshReport {
         });
     }
     let oriented_outward = orientation_consistent && closed && volume > 0.0;
-    if orientation_consistent && closed && manifold && !(volume > 0.0) && nt > 0 && non_finite.is_empty() {
+    if orientation_consistent && closed && manifold && (volume <= 0.0 || volume.is_nan()) && nt > 0 && non_finite.is_empty() {
         issues.push(Issue {
             kind: IssueKind::InwardOrientation,
             severity: Severity::Error,

@@ -164,7 +164,7 @@ impl TriMesh {
             )));
         }
         if opts.weld_tolerance >= 0.0 {
-            let diag = check::bbox_diagonal(&self.vertices);
+            let diag = crate::geometry::Aabb::of_points(&self.vertices).diagonal();
             stats.weld_distance = opts.weld_tolerance * diag;
             stats.vertices_merged = weld::weld(&mut self, stats.weld_distance);
         }
@@ -335,4 +335,4 @@ impl TriIndex for usize {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

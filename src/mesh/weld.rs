@@ -18,7 +18,7 @@ pub(crate) fn weld(mesh: &mut TriMesh, dist: f64) -> usize {
     let mut rep_of = vec![0u32; n]; // old index -> new index
     let mut kept: Vec<[f64; 3]> = Vec::with_capacity(n);
     if dist > 0.0 {
-        let lo = mesh.vertices.iter().fold([f64::INFINITY; 3], |m, p| [m[0].min(p[0]), m[1].min(p[1]), m[2].min(p[2])]);
+        let lo = crate::geometry::Aabb::of_points(&mesh.vertices).min;
         let cell = |p: &[f64; 3]| -> [i64; 3] { std::array::from_fn(|k| ((p[k] - lo[k]) / dist).floor() as i64) };
         let d2 = dist * dist;
         let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(n);

@@ -717,3 +717,69 @@ mod tests {
         assert!((vol - g.count() as f64 / 27.0).abs() < 1e-12, "{vol}");
     }
 }
+
+/// The occupied voxels cropped to their bounding box, as (dims, sorted coordinates).
+fn cropped(g: &VoxelGrid) -> ([usize; 3], Vec<[usize; 3]>) {
+    let pts: Vec<[usize; 3]> = (0..g.occ.len()).filter(|&i| g.occ[i]).map(|i| g.coords(i)).collect();
+    if pts.is_empty() {
+        return ([0; 3], pts);
+    }
+    let lo: [usize; 3] = std::array::from_fn(|a| pts.iter().map(|p| p[a]).min().unwrap());
+    let hi: [usize; 3] = std::array::from_fn(|a| pts.iter().map(|p| p[a]).max().unwrap());
+    let mut v: Vec<[usize; 3]> = pts.iter().map(|p| std::array::from_fn(|a| p[a] - lo[a])).collect();
+    v.sort();
+    (std::array::from_fn(|a| hi[a] - lo[a] + 1), v)
+}
+
+/// Are two voxel sets the same solid up to a translation and one of the 24 rotations
+/// of the cube? (The criterion for "the same polycube" in the context search.)
+pub fn congruent(a: &VoxelGrid, b: &VoxelGrid) -> bool {
+    let (da, va) = cropped(a);
+    let (db, vb) = cropped(b);
+    if va.len() != vb.len() {
+        return false;
+    }
+    for r in super::orientation::rotations() {
+        // rotate a's cropped coordinates: new axis k = sign * old axis perm[k]
+        let dims: [usize; 3] = std::array::from_fn(|k| da[r.perm[k]]);
+        if dims != db {
+            continue;
+        }
+        let mut w: Vec<[usize; 3]> = va
+            .iter()
+            .map(|p| {
+                std::array::from_fn(|k| {
+                    let v = p[r.perm[k]];
+                    if r.sign[k] > 0 {
+                        v
+                    } else {
+                        da[r.perm[k]] - 1 - v
+                    }
+                })
+            })
+            .collect();
+        w.sort();
+        if w == vb {
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod congruence_tests {
+    use super::*;
+    use crate::context::Context;
+
+    #[test]
+    fn congruence_up_to_rotation_and_translation() {
+        let a = Context::parse("BHC+X,0,0,0,0,0,0,0,0,0,0,0").unwrap().assemble();
+        let b = Context::parse("0,0,0,0,0,0,0,0,0,0,0,BHC-Z").unwrap().assemble();
+        assert!(congruent(&a, &b));
+        let c = Context::parse("0,0,0,0,0,0,0,0,0,0,0,THC+Z").unwrap().assemble();
+        assert!(!congruent(&a, &c));
+        let l1 = Context::parse("cube,cube,0,cube,0,0,0,0,0,0,0,0").unwrap().assemble();
+        let l2 = Context::parse("0,cube,cube,0,0,cube,0,0,0,0,0,0").unwrap().assemble();
+        assert!(congruent(&l1, &l2));
+    }
+}

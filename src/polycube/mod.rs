@@ -3,7 +3,10 @@
 
 pub mod assembly;
 pub mod dataset;
+pub mod inference;
+pub mod orientation;
 pub mod primitive;
+pub mod synthetic;
 pub mod tensor;
 
 pub use assembly::{assemble, boundary, check, QuadMesh, Validity, VoxelGrid};

@@ -2,6 +2,10 @@
 //! and the expansion of partial constraints (counts + spatial arrangement) into every
 //! valid context that satisfies them.
 
+pub mod auto;
+pub mod generate;
+pub mod volume;
+
 use crate::error::{Error, Result};
 use crate::polycube::assembly::{assemble, check, VoxelGrid, Validity};
 use crate::polycube::primitive::{cell_coords, Family, Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
@@ -424,5 +428,18 @@ mod tests {
         for x in &v {
             assert_eq!(x.validity().genus, Some(3));
         }
+    }
+}
+
+impl Serialize for Context {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(&self.names())
+    }
+}
+
+impl<'de> Deserialize<'de> for Context {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Context::parse(&s).map_err(serde::de::Error::custom)
     }
 }

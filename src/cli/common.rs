@@ -1,0 +1,60 @@
+//! Pieces shared by the commands: loading a checked mesh, progress on stderr, JSON files.
+
+use sddpm::context::generate::{Candidate, PolycubeResult};
+use sddpm::error::Error;
+use sddpm::mesh::{LoadOptions, MeshReport, TriMesh};
+use sddpm::Result;
+use std::path::Path;
+
+pub struct Loaded {
+    pub mesh: TriMesh,
+    pub report: MeshReport,
+    pub path: String,
+}
+
+/// Load with the default options and refuse a mesh that cannot go on to meshing.
+pub fn load_checked(path: &Path) -> Result<Loaded> {
+    let mesh = TriMesh::load(path, &LoadOptions::default())?;
+    let report = mesh.validate().map_err(|e| match e {
+        Error::InvalidMesh(m) => Error::InvalidMesh(format!("{}: {m}", path.display())),
+        o => o,
+    })?;
+    Ok(Loaded { mesh, report, path: path.display().to_string() })
+}
+
+pub fn write_json(path: &Path, v: &impl serde::Serialize) -> Result<()> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Internal(e.to_string()))?;
+    std::fs::write(path, s).map_err(|e| Error::io(path.display(), e))
+}
+
+/// A progress sink printing one line per stage change (and nothing when quiet).
+pub fn progress_bar(quiet: bool) -> impl FnMut(f64, &str) -> bool {
+    let bar = if quiet { None } else { Some(indicatif::ProgressBar::new(1000)) };
+    if let Some(b) = &bar {
+        b.set_style(indicatif::ProgressStyle::with_template("{msg:>22} [{bar:40}] {percent:>3}% {elapsed}").unwrap().progress_chars("=> "));
+    }
+    move |f: f64, stage: &str| {
+        if let Some(b) = &bar {
+            b.set_message(stage.to_string());
+            b.set_position((f * 1000.0) as u64);
+            if f >= 1.0 {
+                b.finish_and_clear();
+            }
+        }
+        true
+    }
+}
+
+/// The chosen polycube's surface in the user's coordinates (grid -> model frame ->
+/// aligned frame -> user).
+pub fn to_user_polycube(result: &PolycubeResult, c: &Candidate) -> TriMesh {
+    let mut m = sddpm::polycube::boundary(&c.context.assemble()).to_trimesh();
+    if let Some(inp) = &c.input {
+        for v in m.vertices.iter_mut() {
+            let q = inp.frame.to_normalised(*v);
+            let a = inp.map.inverse(q);
+            *v = result.alignment.transform.apply_inverse(a);
+        }
+    }
+    m
+}

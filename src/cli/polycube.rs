@@ -1,0 +1,126 @@
+//! `sddpm polycube MESH -o DIR [--labels L | --constraints FILE | --auto] [--ratios R] [--seed N]`
+
+use super::common::{load_checked, to_user_polycube, write_json, Loaded};
+use sddpm::context::auto::{AutoOptions, SplitRatios};
+use sddpm::context::generate::PolycubeOptions;
+use sddpm::context::{Constraints, Context};
+use sddpm::diffusion::{Backend, Model};
+use sddpm::error::Error;
+use sddpm::pipeline::{generate_polycube, ContextRequest};
+use sddpm::Result;
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct PolycubeArgs {
+    /// Input surface (.obj, .stl, .off).
+    pub mesh: PathBuf,
+    /// Output folder.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    /// A complete context: 12 labels in cell-index order (repeat for a stack).
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["constraints", "auto"])]
+    pub labels: Vec<String>,
+    /// Partial constraints (JSON: {"cube": n, "thc": n, "bhc": n, "labels": {...}, "allowed": [...], "required": [...]}).
+    #[arg(long, conflicts_with = "auto")]
+    pub constraints: Option<PathBuf>,
+    /// Automated context generation (the default when no context is given).
+    #[arg(long)]
+    pub auto: bool,
+    /// Splitting ratios X1,X2,X3:Y1,Y2:Z1,Z2 for the automated mode.
+    #[arg(long)]
+    pub ratios: Option<String>,
+    /// Seed of sampling and diffusion.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Reverse-diffusion steps (0 = the full T-step sampler; default: the library's default).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Model weights (default: the embedded model).
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Print the report as one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn request_of(a: &PolycubeArgs) -> Result<ContextRequest> {
+    if !a.labels.is_empty() {
+        let cs: Vec<Context> = a.labels.iter().map(|l| Context::parse(l)).collect::<Result<_>>()?;
+        return Ok(ContextRequest::Contexts(cs));
+    }
+    if let Some(p) = &a.constraints {
+        let text = std::fs::read_to_string(p).map_err(|e| Error::io(p.display(), e))?;
+        let c: Constraints = serde_json::from_str(&text).map_err(|e| Error::parse(p.display(), e.to_string()))?;
+        return Ok(ContextRequest::Constraints(c));
+    }
+    if let Some(r) = &a.ratios {
+        return Ok(ContextRequest::Ratios(SplitRatios::parse(r)?));
+    }
+    Ok(ContextRequest::Auto)
+}
+
+pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
+    let mut o = PolycubeOptions { seed: a.seed, ..Default::default() };
+    o.sampler.seed = a.seed;
+    if let Some(s) = a.steps {
+        o.sampler.steps = s;
+    }
+    o
+}
+
+pub fn load_model(weights: &Option<PathBuf>) -> Result<Model> {
+    match weights {
+        Some(p) => Model::from_file(p, Backend::default()),
+        None => Model::default_model(),
+    }
+}
+
+pub fn run(a: &PolycubeArgs) -> Result<i32> {
+    let t0 = std::time::Instant::now();
+    let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh)?;
+    let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
+    let request = request_of(a)?;
+    let model = load_model(&a.weights)?;
+    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
+    let quiet = a.quiet;
+    let mut progress = super::common::progress_bar(quiet);
+    let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &options_of(a), &AutoOptions::default(), &mut progress)?;
+    let chosen = result.chosen.map(|i| &result.candidates[i]);
+    if let Some(c) = chosen {
+        let obj = to_user_polycube(&result, c);
+        sddpm::export::obj::write_obj(&a.output.join("polycube.obj"), &obj, &format!("libsddpm polycube {} (user coordinates)", c.context))?;
+    }
+    let report = json!({
+        "input": { "path": path, "vertices": mrep.vertices, "triangles": mrep.triangles, "genus": genus, "volume": mrep.volume },
+        "polycube": {
+            "labels": chosen.map(|c| c.labels.to_vec()),
+            "names": chosen.map(|c| c.context.names()),
+            "source": result.source,
+            "candidates": result.candidates.len(),
+            "verified": result.verified().count(),
+            "genus": chosen.and_then(|c| c.context.validity().genus),
+            "rotation": chosen.map(|c| c.rotation.clone()),
+            "frame": result.frame,
+            "error": err.as_ref().map(|e| e.to_string()),
+        },
+        "seconds": { "total": t0.elapsed().as_secs_f64(), "polycube": result.timings },
+    });
+    write_json(&a.output.join("report.json"), &report)?;
+    write_json(&a.output.join("candidates.json"), &json!({ "candidates": result.candidates, "auto": auto }))?;
+    if a.json {
+        println!("{report}");
+    } else if !quiet {
+        match chosen {
+            Some(c) => eprintln!("polycube: {} (rotation {}, fit {:.4}); {} of {} candidates verified; wrote {}", c.context, c.rotation, c.fit, result.verified().count(), result.candidates.len(), a.output.display()),
+            None => eprintln!("no polycube passed verification; candidates in {}", a.output.join("candidates.json").display()),
+        }
+    }
+    match err {
+        Some(e) => Err(e),
+        None => Ok(0),
+    }
+}

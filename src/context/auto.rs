@@ -1,0 +1,499 @@
+//! The automated mode: genus-guided context generation.
+//!
+//! 1. The temporary volume of the aligned input ([`super::volume`]).
+//! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
+//!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
+//!    aligned bounding box into subregions, measure each one's genus, and take its
+//!    feasible labels (empty -> null; genus 0 -> cube and the six BHC; genus 1 ->
+//!    the three THC; genus >= 2 -> the box cannot hold the input).
+//! 3. Local stage: each subregion's surface (the input's samples inside it plus
+//!    samples on the faces where the subregion is cut out of the solid) is scored
+//!    against every feasible primitive (geometric fit), and the best labels are
+//!    diffused as single cells and verified (GOCC + TCV), all in one batch.
+//! 4. Global stage: products of the kept labels whose assembly is valid and has the
+//!    input's genus are ranked by geometric fit; the best ones pass the occupancy
+//!    pre-check, are diffused in one batch and verified.
+
+use super::generate::{
+    diffuse_and_verify, finish, fit_score, polycube_samples, precheck, prepare_input, Candidate, OrientationSearch,
+    PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
+};
+use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
+use super::Context;
+use crate::diffusion::Model;
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::geometry::SurfaceSample;
+use crate::mesh::TriMesh;
+use crate::polycube::dataset::item_rng;
+use crate::polycube::orientation::AxisRotation;
+use crate::polycube::{Family, Primitive, NUM_CELLS};
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Splitting ratios: fractions of the aligned bounding box along X (up to 3 parts),
+/// Y (up to 2) and Z (up to 2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SplitRatios {
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub z: Vec<f64>,
+}
+
+impl SplitRatios {
+    pub fn equal(nx: usize, ny: usize, nz: usize) -> Self {
+        SplitRatios { x: vec![1.0; nx], y: vec![1.0; ny], z: vec![1.0; nz] }
+    }
+
+    /// Parse "X1,X2,X3:Y1,Y2:Z1,Z2".
+    pub fn parse(s: &str) -> Result<Self> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let bad = || Error::InvalidArgument(format!("splitting ratios are X1[,X2[,X3]]:Y1[,Y2]:Z1[,Z2] (positive numbers), got '{s}'"));
+        if parts.len() != 3 {
+            return Err(bad());
+        }
+        let axis = |t: &str, max: usize| -> Result<Vec<f64>> {
+            let v: Vec<f64> = t.split(',').map(|x| x.trim().parse::<f64>().map_err(|_| bad())).collect::<Result<_>>()?;
+            if v.is_empty() || v.len() > max || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(bad());
+            }
+            Ok(v)
+        };
+        Ok(SplitRatios { x: axis(parts[0], 3)?, y: axis(parts[1], 2)?, z: axis(parts[2], 2)? })
+    }
+
+    pub fn dims(&self) -> [usize; 3] {
+        [self.x.len(), self.y.len(), self.z.len()]
+    }
+}
+
+/// Options of the automated mode, with documented defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AutoOptions {
+    /// Voxels along the longest edge of the temporary volume (default 48).
+    pub resolution: usize,
+    /// A subregion filled less than this is empty (null) (default 0.04).
+    pub min_fill: f64,
+    /// Labels kept per subregion after the local fit (default 3).
+    pub local_keep: usize,
+    /// Run the local single-cell diffusion + verification (default true).
+    pub local_diffusion: bool,
+    /// Global candidates diffused at most (best geometric fit first; default 16).
+    pub max_global: usize,
+    /// A finer box is preferred only when its fit beats the coarsest acceptable box's
+    /// by this factor (default 0.8).
+    pub finer_box_factor: f64,
+    /// Boxes tried (best first) before giving up (default 2).
+    pub max_boxes: usize,
+    /// Sampler steps of the local single-cell diffusion (default 25).
+    pub local_steps: usize,
+}
+
+impl Default for AutoOptions {
+    fn default() -> Self {
+        AutoOptions { resolution: 48, min_fill: 0.04, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25 }
+    }
+}
+
+/// The local stage's record of one subregion.
+#[derive(Debug, Clone, Serialize)]
+pub struct LocalResult {
+    pub subregion: Subregion,
+    /// (label, geometric fit) of every feasible label, best first.
+    pub fits: Vec<(String, f64)>,
+    /// Labels that went on to the global stage.
+    pub kept: Vec<String>,
+    /// Labels that passed local verification.
+    pub verified: Vec<String>,
+}
+
+/// The record of one occupied box.
+#[derive(Debug, Clone, Serialize)]
+pub struct BoxResult {
+    pub dims: [usize; 3],
+    pub ratios: SplitRatios,
+    pub locals: Vec<LocalResult>,
+    /// Global candidates with the input's genus (before the cap).
+    pub candidates: usize,
+    /// Best global geometric fit.
+    pub best_fit: Option<f64>,
+    /// Why this box cannot hold the input, if it cannot.
+    pub refused: Option<String>,
+}
+
+/// What the automated mode measured beyond the candidates.
+#[derive(Debug, Clone, Serialize)]
+pub struct AutoReport {
+    pub volume_tetrahedra: usize,
+    pub volume: f64,
+    pub surface_volume: f64,
+    pub volume_relative_error: f64,
+    pub boxes: Vec<BoxResult>,
+    pub chosen_box: Option<[usize; 3]>,
+}
+
+fn feasible(sub: &Subregion) -> std::result::Result<Vec<Primitive>, String> {
+    if sub.empty {
+        return Ok(vec![Primitive::Null]);
+    }
+    match sub.genus {
+        0 => Ok(Primitive::solids().filter(|p| p.family() != Family::Thc).collect()),
+        1 => Ok(Primitive::solids().filter(|p| p.family() == Family::Thc).collect()),
+        g => Err(format!("subregion of cell {} has genus {g}; one cell holds at most one hole", sub.cell)),
+    }
+}
+
+/// Samples of a subregion: the input's samples inside its box and samples on the
+/// faces where the box cuts the solid, so that the subregion's surface is closed.
+fn subregion_samples(input: &PreparedInput, vol: &VoxelVolume, sub: &Subregion, bb_lo: [f64; 3], bb_hi: [f64; 3], seed: u64) -> Vec<SurfaceSample> {
+    let eps = 1e-9;
+    let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= sub.lo[a] - eps && p[a] <= sub.hi[a] + eps);
+    let mut v: Vec<SurfaceSample> = input.samples.iter().filter(|s| inside(s.point)).copied().collect();
+    let area_per_sample = input.area / input.samples.len().max(1) as f64;
+    let mut rng = item_rng(seed, sub.cell as u64);
+    let g = &vol.grid;
+    for a in 0..3 {
+        for (plane, is_cut) in [(sub.lo[a], sub.lo[a] > bb_lo[a] + eps), (sub.hi[a], sub.hi[a] < bb_hi[a] - eps)] {
+            if !is_cut {
+                continue;
+            }
+            // voxels adjacent to the plane on the subregion's side
+            let layer = (((plane - vol.lo[a]) / vol.h).round() as i64 - if plane == sub.lo[a] { 0 } else { 1 }).max(0) as usize;
+            if layer >= g.dims[a] {
+                continue;
+            }
+            let (u, w) = ((a + 1) % 3, (a + 2) % 3);
+            for j in 0..g.dims[u] {
+                for k in 0..g.dims[w] {
+                    let mut p = [0usize; 3];
+                    p[a] = layer;
+                    p[u] = j;
+                    p[w] = k;
+                    if !g.occ[g.idx(p[0], p[1], p[2])] {
+                        continue;
+                    }
+                    let c = vol.voxel_centre(p[0], p[1], p[2]);
+                    if c[u] < sub.lo[u] || c[u] > sub.hi[u] || c[w] < sub.lo[w] || c[w] > sub.hi[w] {
+                        continue;
+                    }
+                    let expected = vol.h * vol.h / area_per_sample;
+                    let n = expected.floor() as usize + usize::from(rng.random::<f64>() < expected.fract());
+                    for _ in 0..n {
+                        let mut q = c;
+                        q[a] = plane;
+                        q[u] += (rng.random::<f64>() - 0.5) * vol.h;
+                        q[w] += (rng.random::<f64>() - 0.5) * vol.h;
+                        v.push(SurfaceSample { point: q, triangle: u32::MAX, bary: [0.0; 3] });
+                    }
+                }
+            }
+        }
+    }
+    v
+}
+
+/// Run the automated mode (all boxes, or the full grid split by `ratios`).
+pub fn generate_auto(
+    model: &Model,
+    mesh: &TriMesh,
+    input_genus: i64,
+    ratios: Option<&SplitRatios>,
+    opts: &PolycubeOptions,
+    aopts: &AutoOptions,
+    progress: &mut dyn Progress,
+) -> Result<(PolycubeResult, AutoReport)> {
+    let t_all = Instant::now();
+    let mut timings = PolycubeTimings::default();
+    let t0 = Instant::now();
+    let input = prepare_input(mesh, opts)?;
+    timings.align = t0.elapsed().as_secs_f64();
+    check_progress(progress, 0.02, "temporary volume")?;
+    let vol = voxelize(&input.alignment.mesh, aopts.resolution)?;
+    let surface_volume = input.alignment.mesh.check().volume.abs();
+    let mut report = AutoReport {
+        volume_tetrahedra: vol.tetrahedra(),
+        volume: vol.volume(),
+        surface_volume,
+        volume_relative_error: (vol.volume() - surface_volume).abs() / surface_volume.max(1e-300),
+        boxes: Vec::new(),
+        chosen_box: None,
+    };
+    let bb = crate::geometry::Aabb::of_points(&input.alignment.mesh.vertices);
+    let shapes: Vec<SplitRatios> = match ratios {
+        Some(r) => vec![r.clone()],
+        None => {
+            let mut v = Vec::new();
+            for nx in 1..=3 {
+                for ny in 1..=2 {
+                    for nz in 1..=2 {
+                        v.push(SplitRatios::equal(nx, ny, nz));
+                    }
+                }
+            }
+            v.sort_by_key(|r| {
+                let d = r.dims();
+                (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]))
+            });
+            v
+        }
+    };
+    // Per box: global candidates ranked by fit.
+    let mut per_box: Vec<Vec<(Context, f64)>> = Vec::new();
+    let mut local_jobs: Vec<LocalJob> = Vec::new();
+    let t0 = Instant::now();
+    for (bi, r) in shapes.iter().enumerate() {
+        check_progress(progress, 0.05 + 0.25 * bi as f64 / shapes.len() as f64, "subregions")?;
+        let xs = split_points(bb.min[0], bb.max[0], &r.x);
+        let ys = split_points(bb.min[1], bb.max[1], &r.y);
+        let zs = split_points(bb.min[2], bb.max[2], &r.z);
+        let subs = subregions(&vol, &xs, &ys, &zs, aopts.min_fill);
+        let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, refused: None };
+        let mut options: Vec<Vec<Primitive>> = Vec::new();
+        for sub in &subs {
+            let labels = match feasible(sub) {
+                Ok(l) => l,
+                Err(e) => {
+                    br.refused = Some(e);
+                    break;
+                }
+            };
+            let mut lr = LocalResult { subregion: sub.clone(), fits: Vec::new(), kept: Vec::new(), verified: Vec::new() };
+            if labels == [Primitive::Null] {
+                lr.kept.push("null".into());
+                options.push(labels);
+                br.locals.push(lr);
+                continue;
+            }
+            let samples = subregion_samples(&input, &vol, sub, bb.min, bb.max, opts.seed);
+            let mut scored: Vec<(Primitive, f64)> = labels
+                .iter()
+                .map(|&p| {
+                    let mut l = [Primitive::Null; NUM_CELLS];
+                    l[sub.cell] = p;
+                    let ctx = Context::new(l);
+                    let tgt = polycube_samples(&ctx, FIT_SAMPLES);
+                    let sub_samples = &samples[..samples.len().min(FIT_SAMPLES * 2)];
+                    (p, fit_score(sub_samples, &ctx, AxisRotation::IDENTITY, &tgt))
+                })
+                .collect();
+            scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+            lr.fits = scored.iter().map(|(p, f)| (p.name().to_string(), *f)).collect();
+            let best = scored[0].1;
+            let kept: Vec<Primitive> = scored
+                .iter()
+                .take(aopts.local_keep.max(1))
+                .filter(|(_, f)| *f <= 2.0 * best + 0.01)
+                .map(|(p, _)| *p)
+                .collect();
+            lr.kept = kept.iter().map(|p| p.name().to_string()).collect();
+            if aopts.local_diffusion {
+                for &p in &kept {
+                    local_jobs.push(LocalJob { boxi: bi, local: br.locals.len(), cell: sub.cell, label: p, samples: samples.clone() });
+                }
+            }
+            options.push(kept);
+            br.locals.push(lr);
+        }
+        let mut cands: Vec<(Context, f64)> = Vec::new();
+        if br.refused.is_none() {
+            // Cells of the box sit at grid cells (0..nx, 0..ny, 0..nz); the rest are null.
+            let cells: Vec<usize> = br.locals.iter().map(|l| l.subregion.cell).collect();
+            let mut combos: Vec<[Primitive; NUM_CELLS]> = vec![[Primitive::Null; NUM_CELLS]];
+            for (ci, opts_c) in options.iter().enumerate() {
+                let mut next = Vec::with_capacity(combos.len() * opts_c.len());
+                for c in &combos {
+                    for &p in opts_c {
+                        let mut c2 = *c;
+                        c2[cells[ci]] = p;
+                        next.push(c2);
+                    }
+                }
+                combos = next;
+                if combos.len() > 20_000 {
+                    br.refused = Some(format!("{} label combinations; use --ratios with fewer cells", combos.len()));
+                    combos.clear();
+                    break;
+                }
+            }
+            for l in combos {
+                let ctx = Context::new(l);
+                if ctx.occupied().next().is_none() {
+                    continue;
+                }
+                let v = ctx.validity();
+                if v.valid && v.genus == Some(input_genus) {
+                    cands.push((ctx, 0.0));
+                }
+            }
+            br.candidates = cands.len();
+            if cands.is_empty() && br.refused.is_none() {
+                let genera: Vec<String> = br.locals.iter().map(|l| format!("cell {}: {}", l.subregion.cell, if l.subregion.empty { "empty".to_string() } else { format!("genus {}", l.subregion.genus) })).collect();
+                br.refused = Some(format!("no valid assembly of the subregions' labels has genus {input_genus} ({})", genera.join(", ")));
+            }
+        }
+        per_box.push(cands);
+        report.boxes.push(br);
+    }
+    timings.precheck += t0.elapsed().as_secs_f64();
+
+    // Global fit of every candidate (cheap); order the boxes: the coarsest box whose
+    // best fit is not beaten by a finer one by `finer_box_factor`, then the rest by fit.
+    check_progress(progress, 0.3, "global candidates")?;
+    let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    for (bi, cands) in per_box.iter_mut().enumerate() {
+        for (ctx, f) in cands.iter_mut() {
+            *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES));
+        }
+        cands.sort_by(|a, b| a.1.total_cmp(&b.1));
+        report.boxes[bi].best_fit = cands.first().map(|c| c.1);
+    }
+    let mut order: Vec<usize> = Vec::new();
+    for (bi, cands) in per_box.iter().enumerate() {
+        if let Some(&(_, f)) = cands.first() {
+            match order.first() {
+                None => order.push(bi),
+                Some(&c) => {
+                    if f < aopts.finer_box_factor * per_box[c][0].1 {
+                        order.insert(0, bi);
+                    } else {
+                        order.push(bi);
+                    }
+                }
+            }
+        }
+    }
+    if order.len() > 1 {
+        let first = order[0];
+        order[1..].sort_by(|&a, &b| per_box[a][0].1.total_cmp(&per_box[b][0].1));
+        debug_assert_eq!(order[0], first);
+    }
+    if order.is_empty() {
+        let mut why: Vec<String> = report.boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
+        why.truncate(6);
+        return Err(Error::VerificationFailed(format!(
+            "automated mode found no context of genus {input_genus}: {}; try splitting ratios that put each hole in its own cell, e.g. --ratios {}",
+            why.join("; "),
+            suggest_ratios(&vol, bb.min, bb.max)
+        )));
+    }
+    // Try the boxes in that order (at most `max_boxes`) until one yields a verified polycube.
+    let mut all_global: Vec<Candidate> = Vec::new();
+    for (attempt, &cb) in order.iter().take(aopts.max_boxes.max(1)).enumerate() {
+        let span = 0.35 + 0.6 * attempt as f64 / aopts.max_boxes.max(1) as f64;
+        report.chosen_box = Some(report.boxes[cb].dims);
+        // Local single-cell diffusion + verification for this box's kept labels (one batch).
+        let jobs: Vec<&LocalJob> = local_jobs.iter().filter(|j| j.boxi == cb).collect();
+        if !jobs.is_empty() {
+            let mut lc: Vec<Candidate> = Vec::with_capacity(jobs.len());
+            for job in &jobs {
+                // The local cell sits at its own grid position (all 120 single-cell
+                // configurations are in the training set).
+                let mut l = [Primitive::Null; NUM_CELLS];
+                l[job.cell] = job.label;
+                let ctx = Context::new(l);
+                let one = PreparedInput { alignment: input.alignment.clone(), frame: input.frame, samples: job.samples.clone(), area: input.area };
+                let mut o = opts.clone();
+                o.orientations = OrientationSearch::Identity;
+                o.max_fit = f64::INFINITY;
+                o.max_in_empty_fraction = 1.0;
+                o.min_occupied_fraction = 0.0;
+                lc.extend(precheck(&one, &ctx, &o)?);
+            }
+            let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 * f, s);
+            let mut local_opts = opts.clone();
+            local_opts.sampler.steps = aopts.local_steps;
+            diffuse_and_verify(model, &mut lc, &local_opts, &mut sub_progress, &mut timings)?;
+            for (k, job) in jobs.iter().enumerate() {
+                if lc[k].stage == Stage::Verified {
+                    report.boxes[cb].locals[job.local].verified.push(job.label.name().to_string());
+                }
+            }
+            // Keep only global candidates whose local labels passed (a subregion where no
+            // label passed keeps its best-fit labels and is named if the global stage fails).
+            let locals = &report.boxes[cb].locals;
+            per_box[cb].retain(|(ctx, _)| {
+                locals.iter().all(|l| {
+                    let lab = ctx.labels[l.subregion.cell];
+                    lab == Primitive::Null || l.verified.is_empty() || l.verified.iter().any(|v| v == lab.name())
+                })
+            });
+        }
+        let mut global: Vec<Candidate> = Vec::new();
+        let mut o = opts.clone();
+        o.orientations = OrientationSearch::Identity;
+        for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
+            global.extend(precheck(&input, ctx, &o)?);
+        }
+        let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / aopts.max_boxes.max(1) as f64, s);
+        diffuse_and_verify(model, &mut global, opts, &mut sub_progress, &mut timings)?;
+        let done = global.iter().any(|c| c.stage == Stage::Verified);
+        all_global.extend(global);
+        if done {
+            break;
+        }
+    }
+    timings.total = t_all.elapsed().as_secs_f64();
+    let result = finish(input, input_genus, "auto", all_global, timings);
+    Ok((result, report))
+}
+
+/// The error of an automated run in which no global candidate passed: names the
+/// subregions whose local verification failed and suggests ratios.
+pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Error> {
+    if result.chosen.is_some() {
+        return None;
+    }
+    let b = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box)?;
+    let failed: Vec<String> = b
+        .locals
+        .iter()
+        .filter(|l| !l.subregion.empty && l.verified.is_empty())
+        .map(|l| format!("cell {} (genus {}, best fit {})", l.subregion.cell, l.subregion.genus, l.fits.first().map(|f| f.0.as_str()).unwrap_or("-")))
+        .collect();
+    let base = match result.accepted() {
+        Err(Error::VerificationFailed(m)) => m,
+        _ => String::new(),
+    };
+    Some(Error::VerificationFailed(format!(
+        "{base}; box {}x{}x{}: {}; try other splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2) that put each hole in its own cell",
+        b.dims[0],
+        b.dims[1],
+        b.dims[2],
+        if failed.is_empty() { "every subregion passed local verification".to_string() } else { format!("local verification failed in {}", failed.join(", ")) }
+    )))
+}
+
+/// A single-cell diffusion of the local stage.
+struct LocalJob {
+    boxi: usize,
+    local: usize,
+    cell: usize,
+    label: Primitive,
+    samples: Vec<SurfaceSample>,
+}
+
+/// Ratios that split the solid where it is thinnest along X (a heuristic for the error message).
+pub fn suggest_ratios(vol: &VoxelVolume, lo: [f64; 3], hi: [f64; 3]) -> String {
+    let g = &vol.grid;
+    let nx = g.dims[0];
+    let mut col = vec![0usize; nx];
+    for z in 0..g.dims[2] {
+        for y in 0..g.dims[1] {
+            for x in 0..nx {
+                if g.occ[g.idx(x, y, z)] {
+                    col[x] += 1;
+                }
+            }
+        }
+    }
+    // two cuts at the thinnest slabs in the middle thirds
+    let thin = |a: usize, b: usize| (a..b.max(a + 1)).min_by_key(|&i| col[i.min(nx - 1)]).unwrap_or(a);
+    let c1 = thin(nx / 6, nx / 2);
+    let c2 = thin(nx / 2, 5 * nx / 6);
+    let w = hi[0] - lo[0];
+    let x1 = ((c1 as f64 + 0.5) * vol.h + vol.lo[0] - lo[0]) / w;
+    let x2 = ((c2 as f64 + 0.5) * vol.h + vol.lo[0] - lo[0]) / w;
+    format!("{:.2},{:.2},{:.2}:1,1:1,1", x1, (x2 - x1).max(0.05), (1.0 - x2).max(0.05))
+}
+

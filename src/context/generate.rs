@@ -1,0 +1,485 @@
+//! Polycube generation: from an input surface and a context request to verified
+//! candidate polycubes (user-guided mode here; the automated search lives in
+//! `auto`). Every candidate keeps its occupancy pre-check, its verification report
+//! and its diffusion output with the surface correspondence.
+
+use super::Context;
+use crate::diffusion::sample::{reverse_diffusion, SamplerOptions};
+use crate::diffusion::Model;
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::geometry::orient::{align_axes, FrameChoice};
+use crate::geometry::{sample_surface, Alignment, SurfaceSample};
+use crate::mesh::TriMesh;
+use crate::polycube::dataset::item_rng;
+use crate::polycube::inference::{occupancy_only, prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
+use crate::polycube::orientation::{rotations, AxisRotation};
+use crate::polycube::tensor::{unlayout, POINTS_PER_CELL};
+use crate::polycube::NUM_CELLS;
+use crate::verify::{chamfer, verify, VerificationReport, VerifyOptions};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Which of the 24 grid-preserving rotations of the aligned input are tried.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum OrientationSearch {
+    /// Only the frame as aligned.
+    Identity,
+    /// The aligned frame and its three sign flips (axis order kept).
+    SignFlips,
+    /// All 24 proper rotations of the grid's axes.
+    #[default]
+    All,
+}
+
+/// Options of polycube generation, with documented defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PolycubeOptions {
+    pub sampler: SamplerOptions,
+    pub verify: VerifyOptions,
+    pub orientations: OrientationSearch,
+    /// Pre-check: the largest fraction of the input's surface allowed in cells the
+    /// context leaves empty (default 0.03).
+    pub max_in_empty_fraction: f64,
+    /// Pre-check: an occupied cell must receive at least this fraction of its fair share
+    /// (1 / occupied cells) of the surface (default 0.2).
+    pub min_occupied_fraction: f64,
+    /// Orientations kept per context after the pre-check (best first; default 1).
+    pub orientations_per_context: usize,
+    /// Pre-check: the largest geometric fit score (penalty Chamfer distance, squared
+    /// cell units, between the mapped input and the context's exact polycube surface)
+    /// a candidate may have to be diffused (default 0.05).
+    pub max_fit: f64,
+    /// Surface samples drawn from the input (shared by every candidate).
+    pub oversampling: usize,
+    /// Seed of sampling and diffusion.
+    pub seed: u64,
+}
+
+impl Default for PolycubeOptions {
+    fn default() -> Self {
+        PolycubeOptions {
+            sampler: SamplerOptions::default(),
+            verify: VerifyOptions::default(),
+            orientations: OrientationSearch::All,
+            max_in_empty_fraction: 0.03,
+            min_occupied_fraction: 0.2,
+            orientations_per_context: 1,
+            max_fit: 0.05,
+            oversampling: DEFAULT_OVERSAMPLING,
+            seed: 0,
+        }
+    }
+}
+
+/// How far a candidate got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// Passed the pre-check, not diffused yet.
+    Pending,
+    /// Refused by the occupancy pre-check (no diffusion).
+    Occupancy,
+    /// Diffused, failed GOCC.
+    Gocc,
+    /// Passed GOCC, failed TCV.
+    Tcv,
+    /// Passed both.
+    Verified,
+}
+
+/// One candidate polycube.
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    #[serde(serialize_with = "ser_ctx")]
+    pub context: Context,
+    pub labels: [u8; NUM_CELLS],
+    pub rotation: String,
+    #[serde(skip)]
+    pub axis_rotation: AxisRotation,
+    pub occupancy: Occupancy,
+    /// Geometric fit of the mapped input to the exact polycube (squared cell units).
+    pub fit: f64,
+    pub stage: Stage,
+    pub report: Option<VerificationReport>,
+    /// Mean squared distance between the output and the input samples it started
+    /// from (model frame); lower means the polycube stayed closer to the input.
+    pub fidelity: Option<f64>,
+    /// Ranking score (lower is better): geometric fit + mean target PCD.
+    pub score: Option<f64>,
+    #[serde(skip)]
+    pub input: Option<InferenceInput>,
+    /// Diffusion output [3, 64, 96].
+    #[serde(skip)]
+    pub output: Option<Vec<f32>>,
+}
+
+fn ser_ctx<S: serde::Serializer>(c: &Context, s: S) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_str(&c.names())
+}
+
+impl Candidate {
+    /// Pairs (point of the polycube output, input surface sample it came from), both in
+    /// the model frame; only occupied cells' slots.
+    pub fn correspondence(&self) -> Vec<([f64; 3], [f64; 3])> {
+        let (Some(inp), Some(out)) = (&self.input, &self.output) else { return Vec::new() };
+        let blocks = unlayout(out);
+        let mut v = Vec::new();
+        for n in 0..NUM_CELLS {
+            for p in 0..POINTS_PER_CELL {
+                if let Some(s) = inp.slots[n * POINTS_PER_CELL + p] {
+                    v.push((blocks[n][p].map(|x| x as f64), inp.map.forward(s.point)));
+                }
+            }
+        }
+        v
+    }
+}
+
+/// Timings of the polycube stage, seconds.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct PolycubeTimings {
+    pub align: f64,
+    pub precheck: f64,
+    pub diffusion: f64,
+    pub verification: f64,
+    pub total: f64,
+}
+
+/// Everything polycube generation produced.
+#[derive(Debug, Clone, Serialize)]
+pub struct PolycubeResult {
+    pub input_genus: i64,
+    pub source: &'static str,
+    #[serde(skip)]
+    pub alignment: Alignment,
+    pub frame: FrameChoice,
+    pub candidates: Vec<Candidate>,
+    /// Index of the chosen candidate (verified, best score).
+    pub chosen: Option<usize>,
+    pub timings: PolycubeTimings,
+}
+
+impl PolycubeResult {
+    pub fn verified(&self) -> impl Iterator<Item = &Candidate> {
+        self.candidates.iter().filter(|c| c.stage == Stage::Verified)
+    }
+
+    /// The chosen candidate, or the error that explains why there is none.
+    pub fn accepted(&self) -> Result<&Candidate> {
+        match self.chosen {
+            Some(i) => Ok(&self.candidates[i]),
+            None => Err(Error::VerificationFailed(self.failure_summary())),
+        }
+    }
+
+    fn failure_summary(&self) -> String {
+        let diffused = self.candidates.iter().filter(|c| c.stage != Stage::Occupancy && c.stage != Stage::Pending).count();
+        let mut s = format!(
+            "none of {} candidate(s) passed ({} refused by the occupancy pre-check, {} failed GOCC, {} failed TCV)",
+            self.candidates.len(),
+            self.candidates.len() - diffused,
+            self.candidates.iter().filter(|c| c.stage == Stage::Gocc).count(),
+            self.candidates.iter().filter(|c| c.stage == Stage::Tcv).count()
+        );
+        if let Some(c) = self.candidates.iter().find(|c| c.report.is_some()) {
+            if let Some(r) = c.report.as_ref().and_then(|r| r.reason.clone()) {
+                s.push_str(&format!("; first: {} -> {r}", c.context));
+            }
+        } else if let Some(c) = self.candidates.first() {
+            s.push_str(&format!(
+                "; first: {} leaves {:.1}% of the surface in empty cells",
+                c.context,
+                100.0 * c.occupancy.in_empty_cells
+            ));
+        }
+        if self.source == "user" {
+            s.push_str("; revise the context or use the automated mode (--auto)");
+        }
+        s
+    }
+}
+
+/// Checks a caller's contexts before any diffusion: valid assemblies whose genus is the input's.
+pub fn check_contexts(contexts: &[Context], input_genus: i64) -> Result<()> {
+    if contexts.is_empty() {
+        return Err(Error::InvalidArgument("no context given".into()));
+    }
+    for (i, c) in contexts.iter().enumerate() {
+        let v = c.validity();
+        if !v.valid {
+            return Err(Error::InvalidContext(format!("context {i} ({c}): {}", v.reason.unwrap_or_default())));
+        }
+        let g = v.genus.unwrap();
+        if g != input_genus {
+            return Err(Error::GenusMismatch {
+                input: input_genus,
+                context: g,
+                detail: format!(" (context {i}: {c}); no diffusion was run"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Prepared input shared by all candidates of one surface.
+pub struct PreparedInput {
+    pub alignment: Alignment,
+    pub frame: FrameChoice,
+    pub samples: Vec<SurfaceSample>,
+    /// Surface area of the aligned mesh.
+    pub area: f64,
+}
+
+pub fn prepare_input(mesh: &TriMesh, opts: &PolycubeOptions) -> Result<PreparedInput> {
+    let (alignment, frame) = align_axes(mesh)?;
+    let mut rng = item_rng(opts.seed, 0x5a3f);
+    let samples = sample_surface(&alignment.mesh, opts.oversampling.max(POINTS_PER_CELL), &mut rng);
+    if samples.is_empty() {
+        return Err(Error::InvalidMesh("the surface has no area to sample".into()));
+    }
+    let area = crate::geometry::surface_moments(&alignment.mesh).area;
+    Ok(PreparedInput { alignment, frame, samples, area })
+}
+
+/// Samples used by the cheap pre-check (a prefix of the shared samples).
+pub const PRECHECK_SAMPLES: usize = 8192;
+
+/// The occupancy pre-check of one context over the orientation search: the best
+/// orientations (lowest surface fraction in empty cells, then fewest starved cells)
+/// become candidates; only those that pass get their full inference tensor.
+pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) -> Result<Vec<Candidate>> {
+    let rots: Vec<AxisRotation> = match opts.orientations {
+        OrientationSearch::Identity => vec![rotations()[0]],
+        OrientationSearch::SignFlips => rotations()[..4].to_vec(),
+        OrientationSearch::All => rotations().to_vec(),
+    };
+    let sub = &input.samples[..input.samples.len().min(PRECHECK_SAMPLES)];
+    let mut scored: Vec<(usize, Occupancy)> = rots
+        .iter()
+        .enumerate()
+        .filter_map(|(k, r)| occupancy_only(sub, ctx, *r, opts.min_occupied_fraction).map(|o| (k, o)))
+        .collect();
+    if scored.is_empty() {
+        return Err(Error::InvalidContext(format!("{ctx}: no occupied cell")));
+    }
+    scored.sort_by(|a, b| {
+        a.1.starved_cells.len().min(1).cmp(&b.1.starved_cells.len().min(1))
+            .then(a.1.in_empty_cells.total_cmp(&b.1.in_empty_cells))
+            .then(a.1.starved_cells.len().cmp(&b.1.starved_cells.len()))
+            .then(a.0.cmp(&b.0))
+    });
+    let passes = |o: &Occupancy| o.in_empty_cells <= opts.max_in_empty_fraction && o.starved_cells.is_empty();
+    // Among the orientations the occupancy allows, rank by geometric fit.
+    let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    let target = polycube_samples(ctx, FIT_SAMPLES);
+    let mut ranked: Vec<(usize, Occupancy, f64)> = scored
+        .into_iter()
+        .map(|(k, o)| {
+            let f = if passes(&o) { fit_score(fit_sub, ctx, rots[k], &target) } else { f64::INFINITY };
+            (k, o, f)
+        })
+        .collect();
+    ranked.sort_by(|a, b| (!passes(&a.1)).cmp(&!passes(&b.1)).then(a.2.total_cmp(&b.2)).then(a.0.cmp(&b.0)));
+    let n_pass = ranked.iter().filter(|(_, o, f)| passes(o) && *f <= opts.max_fit).count();
+    let keep = if n_pass == 0 { 1 } else { n_pass.min(opts.orientations_per_context.max(1)) };
+    let mut out = Vec::with_capacity(keep);
+    for (k, occ, fit) in ranked.into_iter().take(keep) {
+        let r = rots[k];
+        let ok = passes(&occ) && fit <= opts.max_fit;
+        let input_t = if ok {
+            let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
+            Some(prepare(&input.samples, ctx, r, opts.min_occupied_fraction, &mut rng)?)
+        } else {
+            None
+        };
+        out.push(Candidate {
+            context: *ctx,
+            labels: ctx.label_values(),
+            rotation: r.name(),
+            axis_rotation: r,
+            occupancy: input_t.as_ref().map(|i| i.occupancy.clone()).unwrap_or(occ),
+            fit,
+            stage: if ok { Stage::Pending } else { Stage::Occupancy },
+            report: None,
+            fidelity: None,
+            score: None,
+            input: input_t,
+            output: None,
+        });
+    }
+    Ok(out)
+}
+
+/// The fit score is a penalty Chamfer distance with this threshold (squared cell
+/// units: 0.1 cell), so that a missing or extra hole, whose points lie 1/6 cell or
+/// more from the other surface, weighs far more than a smooth deformation.
+pub const FIT_TAU: f64 = 0.01;
+
+/// Samples used by the geometric fit score.
+pub const FIT_SAMPLES: usize = 2048;
+
+/// `n` points uniform on the exact boundary of a context's assembly, in grid units,
+/// each with the cell of the voxel it bounds.
+pub fn polycube_samples(ctx: &Context, n: usize) -> Vec<([f64; 3], usize)> {
+    let q = crate::polycube::boundary(&ctx.assemble());
+    if q.quads.is_empty() {
+        return Vec::new();
+    }
+    let mut rng = item_rng(0xf17, ctx.occupancy_mask() as u64);
+    use rand::RngExt;
+    (0..n)
+        .map(|_| {
+            let k = rng.random_range(0..q.quads.len());
+            let f = q.quads[k].map(|i| q.vertices[i as usize]);
+            let v = q.quad_voxel[k].0;
+            let (u, w): (f64, f64) = (rng.random(), rng.random());
+            let p = std::array::from_fn(|a| f[0][a] + u * (f[1][a] - f[0][a]) + w * (f[3][a] - f[0][a]));
+            (p, crate::polycube::cell_index(v[0] / 3, v[1] / 3, v[2] / 3))
+        })
+        .collect()
+}
+
+/// Geometric fit of the input to a context (squared cell units; lower is better): the
+/// input samples are mapped onto the context's box under `rotation` and compared with
+/// the exact polycube surface `target` by a penalty Chamfer distance per cell (each
+/// point's distance to the whole other set, averaged over the points of that cell);
+/// the score is the worst cell's. A missing, extra or misdirected hole in one cell
+/// shows up in full instead of being diluted by the other cells.
+pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)]) -> f64 {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    let Some((frame, dlo, dhi)) = crate::polycube::inference::context_box(ctx) else { return f64::INFINITY };
+    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
+    let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for r in &rotated {
+        for a in 0..3 {
+            lo[a] = lo[a].min(r[a]);
+            hi[a] = hi[a].max(r[a]);
+        }
+    }
+    let map = crate::polycube::inference::BoxMap { rotation: AxisRotation::IDENTITY, src_lo: lo, src_hi: hi, dst_lo: dlo, dst_hi: dhi };
+    let mapped: Vec<[f64; 3]> = rotated.iter().map(|r| map.forward(*r)).collect();
+    if mapped.is_empty() || target.is_empty() {
+        return f64::INFINITY;
+    }
+    let cells_in: Vec<usize> = mapped.iter().map(|q| crate::polycube::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
+    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| frame.to_grid(*q)).collect();
+    let tgt: Vec<[f64; 3]> = target.iter().map(|t| t.0).collect();
+    let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
+    let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
+    let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
+    let mut sum_in = [0.0f64; NUM_CELLS];
+    let mut n_in = [0usize; NUM_CELLS];
+    for (p, &c) in grid_in.iter().zip(&cells_in) {
+        sum_in[c] += f(t_tg.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
+        n_in[c] += 1;
+    }
+    let mut sum_tg = [0.0f64; NUM_CELLS];
+    let mut n_tg = [0usize; NUM_CELLS];
+    for (p, c) in target {
+        sum_tg[*c] += f(t_in.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
+        n_tg[*c] += 1;
+    }
+    let mut worst: f64 = 0.0;
+    for c in 0..NUM_CELLS {
+        if n_tg[c] == 0 {
+            continue;
+        }
+        let a = if n_in[c] > 0 { sum_in[c] / n_in[c] as f64 } else { f64::INFINITY };
+        worst = worst.max(0.5 * (a + sum_tg[c] / n_tg[c] as f64));
+    }
+    worst
+}
+
+/// Diffuse and verify the candidates that passed the pre-check (batched).
+pub fn diffuse_and_verify(
+    model: &Model,
+    cands: &mut [Candidate],
+    opts: &PolycubeOptions,
+    progress: &mut dyn Progress,
+    timings: &mut PolycubeTimings,
+) -> Result<()> {
+    let idx: Vec<usize> = (0..cands.len()).filter(|&i| cands[i].stage == Stage::Pending && cands[i].input.is_some()).collect();
+    if idx.is_empty() {
+        return Ok(());
+    }
+    let inputs: Vec<Vec<f32>> = idx.iter().map(|&i| cands[i].input.as_ref().unwrap().tensor.clone()).collect();
+    let ctxs: Vec<Context> = idx.iter().map(|&i| cands[i].context).collect();
+    let t0 = Instant::now();
+    let out = reverse_diffusion(model, &inputs, &ctxs, &opts.sampler, progress)?;
+    timings.diffusion += t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
+    for (k, &i) in idx.iter().enumerate() {
+        let c = &mut cands[i];
+        let inp = c.input.as_ref().unwrap();
+        let rep = verify(&out.tensors[k], &c.context, &inp.frame, &opts.verify);
+        c.stage = if !rep.gocc_pass {
+            Stage::Gocc
+        } else if !rep.tcv_pass {
+            Stage::Tcv
+        } else {
+            Stage::Verified
+        };
+        c.output = Some(out.tensors[k].clone());
+        let pairs = c.correspondence();
+        let fid = pairs.iter().map(|(a, b)| (0..3).map(|j| (a[j] - b[j]).powi(2)).sum::<f64>()).sum::<f64>() / pairs.len().max(1) as f64;
+        c.fidelity = Some(fid);
+        c.score = Some(c.fit + rep.mean_target_pcd);
+        c.report = Some(rep);
+    }
+    timings.verification += t0.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// Symmetric Chamfer distance between a candidate's output and its input samples.
+pub fn output_input_chamfer(c: &Candidate) -> Option<f64> {
+    let pairs = c.correspondence();
+    if pairs.is_empty() {
+        return None;
+    }
+    let a: Vec<[f64; 3]> = pairs.iter().map(|p| p.0).collect();
+    let b: Vec<[f64; 3]> = pairs.iter().map(|p| p.1).collect();
+    Some(chamfer(&a, &b))
+}
+
+/// User-guided mode with complete contexts (one or a stack). `input_genus` is the
+/// genus the mesh check measured. A context of another genus is refused before any
+/// diffusion.
+pub fn generate_from_contexts(
+    model: &Model,
+    mesh: &TriMesh,
+    input_genus: i64,
+    contexts: &[Context],
+    opts: &PolycubeOptions,
+    progress: &mut dyn Progress,
+) -> Result<PolycubeResult> {
+    let t_all = Instant::now();
+    check_contexts(contexts, input_genus)?;
+    let mut timings = PolycubeTimings::default();
+    let t0 = Instant::now();
+    let input = prepare_input(mesh, opts)?;
+    timings.align = t0.elapsed().as_secs_f64();
+    check_progress(progress, 0.0, "occupancy pre-check")?;
+    let t0 = Instant::now();
+    let mut cands = Vec::new();
+    for c in contexts {
+        cands.extend(precheck(&input, c, opts)?);
+    }
+    timings.precheck = t0.elapsed().as_secs_f64();
+    diffuse_and_verify(model, &mut cands, opts, progress, &mut timings)?;
+    timings.total = t_all.elapsed().as_secs_f64();
+    Ok(finish(input, input_genus, "user", cands, timings))
+}
+
+/// Rank the verified candidates and build the result.
+pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cands: Vec<Candidate>, timings: PolycubeTimings) -> PolycubeResult {
+    let chosen = cands
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.stage == Stage::Verified && c.output.is_some())
+        .min_by(|a, b| a.1.score.unwrap_or(f64::INFINITY).total_cmp(&b.1.score.unwrap_or(f64::INFINITY)))
+        .map(|(i, _)| i);
+    PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings }
+}

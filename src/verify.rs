@@ -1,0 +1,358 @@
+//! Hierarchical verification of a diffusion output (the paper's Algorithms 1 and 2,
+//! plus the spatial check of DESIGN.md):
+//!
+//! 1. GOCC (global occupancy consistency check): split the output by cell block,
+//!    drop points of norm <= 1e-4; an occupied cell needs >= `min_points` points and
+//!    a largest bounding-box span >= `tau_active`; a null cell must have fewer than
+//!    `min_points`. Spatial check: an occupied block's points must lie in (a
+//!    tolerance around) their own cell, and the regions of null cells must stay
+//!    nearly empty.
+//! 2. TCV (template-based consistency verification), per active cell: centre the
+//!    cell's points and every template; penalty Chamfer distance
+//!    PCD(X, Y) = 1/2 (mean_x f(min_y |x-y|^2) + mean_y f(min_x |x-y|^2)),
+//!    f(d) = d if d <= tau_CD else d (1 + (d / tau_CD)^p); accept iff the target
+//!    template is the nearest of all ten and d_target <= tau_CD.
+//!
+//! Distances are measured in cell units (the cell's points divided by the cell edge
+//! of the model's frame), so the thresholds do not depend on how many cells the
+//! context occupies.
+
+use crate::context::Context;
+use crate::polycube::dataset::{item_rng, sample_primitive};
+use crate::polycube::tensor::{unlayout, BoxFrame, TENSOR_LEN};
+use crate::polycube::{cell_coords, Primitive, NUM_CELLS, NUM_LABELS};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use serde::{Deserialize, Serialize};
+
+/// Every threshold of the verification, with the defaults measured in BENCHMARKS.md
+/// ("Verification thresholds").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct VerifyOptions {
+    /// Points of norm <= this are placeholders (null cells hold (0,0,0)).
+    pub zero_norm: f64,
+    /// Points a cell needs to count as active (GOCC).
+    pub min_points: usize,
+    /// Minimum largest bounding-box span of an active cell, in cell units.
+    pub tau_active: f64,
+    /// Tolerance around a cell for the spatial check, in cell units.
+    pub cell_tolerance: f64,
+    /// Fraction of an occupied block's points that must lie in its cell (with tolerance).
+    pub min_inside_fraction: f64,
+    /// Largest fraction of all active points allowed inside null cells' regions.
+    pub max_null_region_fraction: f64,
+    /// TCV threshold on the penalty Chamfer distance (squared cell units).
+    pub tau_cd: f64,
+    /// Exponent p of the penalty.
+    pub penalty_p: f64,
+    /// Points sampled on each template.
+    pub template_points: usize,
+}
+
+impl Default for VerifyOptions {
+    fn default() -> Self {
+        VerifyOptions {
+            zero_norm: 1e-4,
+            min_points: 10,
+            tau_active: 0.5,
+            cell_tolerance: 0.15,
+            min_inside_fraction: 0.9,
+            max_null_region_fraction: 0.02,
+            tau_cd: 0.01,
+            penalty_p: 2.0,
+            template_points: 2048,
+        }
+    }
+}
+
+/// What was measured for one cell.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CellReport {
+    pub cell: usize,
+    pub label: String,
+    /// Points of norm > zero_norm in the cell's block.
+    pub points: usize,
+    /// Largest bounding-box span (cell units).
+    pub span: f64,
+    /// Fraction of the block's points inside its own cell (with tolerance).
+    pub inside_fraction: f64,
+    /// PCD to each of the ten templates (labels 1..10); empty for inactive cells.
+    pub pcd: Vec<f64>,
+    /// Label of the nearest template (by PCD).
+    pub nearest: Option<String>,
+    pub pass: bool,
+    pub reason: Option<String>,
+}
+
+/// The verification of one candidate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VerificationReport {
+    pub gocc_pass: bool,
+    pub tcv_pass: bool,
+    pub passed: bool,
+    /// Fraction of active points that fell into null cells' regions.
+    pub null_region_fraction: f64,
+    /// Mean PCD to the target templates over active cells (lower is better).
+    pub mean_target_pcd: f64,
+    pub cells: Vec<CellReport>,
+    /// First reason of failure, naming the cell.
+    pub reason: Option<String>,
+}
+
+/// Centred template point sets in cell units, one per label (index 0 empty).
+pub fn templates(n: usize) -> Vec<Vec<[f64; 3]>> {
+    let mut rng = item_rng(0x7e3, n as u64);
+    Primitive::ALL
+        .iter()
+        .map(|&p| {
+            let pts = sample_primitive(p, if p == Primitive::Null { 0 } else { n }, &mut rng);
+            centre(&pts)
+        })
+        .collect()
+}
+
+fn cached_templates(n: usize) -> std::sync::Arc<Vec<Vec<[f64; 3]>>> {
+    use std::sync::{Arc, Mutex, OnceLock};
+    static CACHE: OnceLock<Mutex<Vec<(usize, Arc<Vec<Vec<[f64; 3]>>>)>>> = OnceLock::new();
+    let c = CACHE.get_or_init(|| Mutex::new(Vec::new()));
+    let mut g = c.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, t)) = g.iter().find(|(k, _)| *k == n) {
+        return t.clone();
+    }
+    let t = Arc::new(templates(n));
+    g.push((n, t.clone()));
+    t
+}
+
+fn centre(pts: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    if pts.is_empty() {
+        return Vec::new();
+    }
+    let mut c = [0.0; 3];
+    for p in pts {
+        for a in 0..3 {
+            c[a] += p[a];
+        }
+    }
+    let n = pts.len() as f64;
+    pts.iter().map(|p| [p[0] - c[0] / n, p[1] - c[1] / n, p[2] - c[2] / n]).collect()
+}
+
+fn penalty(d: f64, tau: f64, p: f64) -> f64 {
+    if d <= tau {
+        d
+    } else {
+        d * (1.0 + (d / tau).powf(p))
+    }
+}
+
+fn one_sided(from: &[[f64; 3]], to: &ImmutableKdTree<f64, 3>, tau: f64, p: f64) -> f64 {
+    let mut s = 0.0;
+    for x in from {
+        let d = to.query(x).nearest_one::<SquaredEuclidean<f64>>().execute().distance;
+        s += penalty(d, tau, p);
+    }
+    s / from.len().max(1) as f64
+}
+
+/// Penalty Chamfer distance between two point sets.
+pub fn pcd(x: &[[f64; 3]], y: &[[f64; 3]], tau: f64, p: f64) -> f64 {
+    if x.is_empty() || y.is_empty() {
+        return f64::INFINITY;
+    }
+    let tx = ImmutableKdTree::new_from_slice(x).expect("non-empty");
+    let ty = ImmutableKdTree::new_from_slice(y).expect("non-empty");
+    0.5 * (one_sided(x, &ty, tau, p) + one_sided(y, &tx, tau, p))
+}
+
+/// Plain (symmetric, mean squared) Chamfer distance.
+pub fn chamfer(x: &[[f64; 3]], y: &[[f64; 3]]) -> f64 {
+    pcd(x, y, f64::INFINITY, 1.0)
+}
+
+/// Verify one output tensor against its context, in the model frame `frame`.
+pub fn verify(output: &[f32], ctx: &Context, frame: &BoxFrame, opts: &VerifyOptions) -> VerificationReport {
+    assert_eq!(output.len(), TENSOR_LEN);
+    let blocks = unlayout(output);
+    let cell_edge = frame.scale; // one grid cell in the model frame
+    let tpl = cached_templates(opts.template_points);
+    let mut cells = Vec::with_capacity(NUM_CELLS);
+    let mut reason: Option<String> = None;
+    let mut gocc = true;
+    let mut tcv = true;
+    let mut active_total = 0usize;
+    let mut in_null = 0usize;
+    let mut target_sum = 0.0;
+    let mut target_n = 0usize;
+    // Active points of every block, in grid units (for the null-region check).
+    let mut all_grid: Vec<[f64; 3]> = Vec::new();
+    for n in 0..NUM_CELLS {
+        let label = ctx.labels[n];
+        let pts: Vec<[f64; 3]> = blocks[n]
+            .iter()
+            .map(|p| p.map(|v| v as f64))
+            .filter(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() > opts.zero_norm)
+            .collect();
+        let mut rep = CellReport {
+            cell: n,
+            label: label.name().to_string(),
+            points: pts.len(),
+            span: 0.0,
+            inside_fraction: 0.0,
+            pcd: Vec::new(),
+            nearest: None,
+            pass: true,
+            reason: None,
+        };
+        let grid: Vec<[f64; 3]> = pts.iter().map(|&p| frame.to_grid(p)).collect();
+        if !grid.is_empty() {
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            for g in &grid {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(g[a]);
+                    hi[a] = hi[a].max(g[a]);
+                }
+            }
+            rep.span = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+            let [i, j, k] = cell_coords(n);
+            let o = [i as f64, j as f64, k as f64];
+            let t = opts.cell_tolerance;
+            let inside = grid.iter().filter(|g| (0..3).all(|a| g[a] >= o[a] - t && g[a] <= o[a] + 1.0 + t)).count();
+            rep.inside_fraction = inside as f64 / grid.len() as f64;
+        }
+        let fail = |rep: &mut CellReport, why: String| {
+            rep.pass = false;
+            if rep.reason.is_none() {
+                rep.reason = Some(why);
+            }
+        };
+        if label == Primitive::Null {
+            if pts.len() >= opts.min_points {
+                fail(&mut rep, format!("cell {n} {:?} is null but holds {} points", cell_coords(n), pts.len()));
+                gocc = false;
+            }
+        } else {
+            active_total += pts.len();
+            all_grid.extend_from_slice(&grid);
+            if pts.len() < opts.min_points {
+                fail(&mut rep, format!("cell {n} {:?} ({label}) holds only {} points", cell_coords(n), pts.len()));
+                gocc = false;
+            } else if rep.span < opts.tau_active {
+                let why = format!("cell {n} {:?} ({label}) collapsed: span {:.3} < {:.3} cell units", cell_coords(n), rep.span, opts.tau_active);
+                fail(&mut rep, why);
+                gocc = false;
+            } else if rep.inside_fraction < opts.min_inside_fraction {
+                let why = format!("cell {n} {:?} ({label}): only {:.0}% of its points lie in the cell", cell_coords(n), 100.0 * rep.inside_fraction);
+                fail(&mut rep, why);
+                gocc = false;
+            }
+            // TCV on the centred points in cell units.
+            if pts.len() >= opts.min_points {
+                let local: Vec<[f64; 3]> = centre(&pts).iter().map(|p| p.map(|v| v / cell_edge)).collect();
+                let mut best = (f64::INFINITY, Primitive::Null);
+                for p in Primitive::solids() {
+                    let d = pcd(&local, &tpl[p.label() as usize], opts.tau_cd, opts.penalty_p);
+                    rep.pcd.push(d);
+                    if d < best.0 {
+                        best = (d, p);
+                    }
+                }
+                let dt = rep.pcd[label.label() as usize - 1];
+                target_sum += dt;
+                target_n += 1;
+                rep.nearest = Some(best.1.name().to_string());
+                if best.1 != label && best.0 < dt {
+                    fail(&mut rep, format!("cell {n} {:?}: its points are nearer to {} (PCD {:.4}) than to {label} (PCD {dt:.4})", cell_coords(n), best.1, best.0));
+                    tcv = false;
+                } else if dt > opts.tau_cd {
+                    fail(&mut rep, format!("cell {n} {:?} ({label}): PCD {dt:.4} above tau_CD {:.4}", cell_coords(n), opts.tau_cd));
+                    tcv = false;
+                }
+            } else {
+                tcv = false;
+            }
+        }
+        if reason.is_none() {
+            reason = rep.reason.clone();
+        }
+        cells.push(rep);
+    }
+    for g in &all_grid {
+        let c = [g[0].floor(), g[1].floor(), g[2].floor()];
+        if c.iter().zip([3.0, 2.0, 2.0]).all(|(&v, m)| v >= 0.0 && v < m) {
+            let n = crate::polycube::cell_index(c[0] as usize, c[1] as usize, c[2] as usize);
+            // count only points well inside a null cell (not on its faces)
+            let inner = (0..3).all(|a| g[a] - c[a] > opts.cell_tolerance && c[a] + 1.0 - g[a] > opts.cell_tolerance);
+            if ctx.labels[n] == Primitive::Null && inner {
+                in_null += 1;
+            }
+        }
+    }
+    let null_region_fraction = in_null as f64 / active_total.max(1) as f64;
+    if null_region_fraction > opts.max_null_region_fraction {
+        gocc = false;
+        if reason.is_none() {
+            reason = Some(format!(
+                "{:.1}% of the points fell inside cells the context leaves empty",
+                100.0 * null_region_fraction
+            ));
+        }
+    }
+    let passed = gocc && tcv;
+    VerificationReport {
+        gocc_pass: gocc,
+        tcv_pass: tcv,
+        passed,
+        null_region_fraction,
+        mean_target_pcd: if target_n > 0 { target_sum / target_n as f64 } else { f64::INFINITY },
+        cells,
+        reason: if passed { None } else { reason },
+    }
+}
+
+/// Labels used by the report, in the order of `CellReport::pcd`.
+pub fn pcd_labels() -> [&'static str; NUM_LABELS - 1] {
+    std::array::from_fn(|i| Primitive::ALL[i + 1].name())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::polycube::dataset::{context_frame, sample_cells};
+    use crate::polycube::tensor::layout;
+
+    #[test]
+    fn exact_samples_pass_and_wrong_labels_fail() {
+        let ctx = Context::parse("THC+Z,cube,BHC+X,0,BHC-Y,0,0,THC+X,0,0,0,0").unwrap();
+        let mut rng = item_rng(99, 0);
+        let cells = sample_cells(&ctx, 1.0, &mut rng);
+        let t = layout(&cells);
+        let frame = context_frame(&ctx).unwrap();
+        let r = verify(&t, &ctx, &frame, &VerifyOptions::default());
+        assert!(r.passed, "{:?}", r.reason);
+        for c in &r.cells {
+            if c.label != "null" {
+                assert_eq!(c.nearest.as_deref(), Some(c.label.as_str()), "cell {}", c.cell);
+            }
+        }
+        // The same points checked against a context that says cube where the truth is THC+Z.
+        let wrong = Context::parse("cube,cube,BHC+X,0,BHC-Y,0,0,THC+X,0,0,0,0").unwrap();
+        let r = verify(&t, &wrong, &frame, &VerifyOptions::default());
+        assert!(!r.tcv_pass);
+        assert!(r.reason.unwrap().contains("cell 0"));
+        // An all-zero output fails GOCC.
+        let r = verify(&vec![0.0; TENSOR_LEN], &ctx, &frame, &VerifyOptions::default());
+        assert!(!r.gocc_pass);
+    }
+
+    #[test]
+    fn pcd_penalises_far_points() {
+        let a = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
+        let b = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.3]];
+        let plain = chamfer(&a, &b);
+        assert!((plain - 0.5 * (0.09 / 2.0 + 0.09 / 2.0)).abs() < 1e-12);
+        assert!(pcd(&a, &b, 0.01, 2.0) > plain);
+        assert_eq!(pcd(&a, &b, 1.0, 2.0), plain);
+    }
+}
