@@ -82,6 +82,9 @@ pub struct HexOptions {
     /// Stopping rule threshold: largest distance between a mapped midpoint and its
     /// linear interpolation, relative to the input's bounding-box diagonal (default 0.004).
     pub threshold: f64,
+    /// The stopping rule also stops when the measure of a level is above this fraction
+    /// of the previous level's (refining no longer helps; default 0.75).
+    pub stall_ratio: f64,
     /// The level is capped so that the mesh has at most this many elements before pillowing (default 400 000).
     pub max_elements: usize,
     /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
@@ -119,6 +122,7 @@ impl Default for HexOptions {
             max_level: 4,
             threshold: 0.004,
             max_elements: 400_000,
+            stall_ratio: 0.75,
             feature_angle: 40.0,
             min_feature_length: 0.03,
             corner_angle: 45.0,
@@ -460,7 +464,10 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             let dev = dev / diag_w;
             let k = levels.len() - 1;
             levels[k].deviation = Some(dev);
-            if opts.level.is_none() && pv.h.level >= min_level && dev <= opts.threshold {
+            // a measure that no longer shrinks means refining does not resolve what is
+            // left (sharp features no polycube edge follows): stop there as well
+            let stalled = k >= 1 && levels[k - 1].deviation.is_some_and(|d0| dev > opts.stall_ratio * d0);
+            if opts.level.is_none() && pv.h.level >= min_level && (dev <= opts.threshold || stalled) {
                 levels.push(rep);
                 chosen = prev.take();
                 break;
