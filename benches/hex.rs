@@ -66,6 +66,10 @@ fn run() {
             }
             "--raw" => opts.keep_better_mapped = false,
             "--no-pillow" => opts.pillow = false,
+            "--fit-rounds" => {
+                opts.surface_relax_iterations = args[i + 1].parse().unwrap();
+                i += 1;
+            }
             "--no-quality" => {
                 opts.smooth_iterations = 0;
                 opts.optimise_passes = 0;

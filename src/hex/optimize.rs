@@ -564,6 +564,22 @@ pub fn mean_ratio_smooth(
     floor: Option<f64>,
     nodes_filter: impl Fn(usize) -> bool,
 ) -> MoveStats {
+    mean_ratio_smooth_released(w, sw, passes, floor, nodes_filter, &[], 0.0)
+}
+
+/// [`mean_ratio_smooth`] where the surface / curve nodes flagged in `released` may
+/// leave the input by at most `leave` (they move freely, then are pulled back to
+/// within `leave` of their closest surface point): the trade of a little surface fit
+/// for validity where the boundary itself is folded.
+pub fn mean_ratio_smooth_released(
+    w: &mut Work,
+    sw: &Surface,
+    passes: usize,
+    floor: Option<f64>,
+    nodes_filter: impl Fn(usize) -> bool,
+    released: &[bool],
+    leave: f64,
+) -> MoveStats {
     let mut st = MoveStats::default();
     let n = w.mesh.nodes.len();
     let mut active: Vec<bool> = (0..n).map(|v| !matches!(w.role[v], Role::Corner(_)) && nodes_filter(v)).collect();
@@ -589,7 +605,8 @@ pub fn mean_ratio_smooth(
             if !e0.is_finite() {
                 continue;
             }
-            if let Role::Free = role {
+            let free3d = released.get(v).copied().unwrap_or(false) && matches!(role, Role::Free | Role::Curve(_));
+            if let (Role::Free, false) = (role, free3d) {
                 let t = w.attach[v];
                 let nrm = if t != u32::MAX { sw.normal(t) } else { sw.normal(sw.closest(x).1) };
                 g = sub(g, scale(nrm, dot(g, nrm)));
@@ -601,7 +618,13 @@ pub fn mean_ratio_smooth(
             let mut step = 0.2 * l / gl;
             for _ in 0..10 {
                 st.moves_tried += 1;
-                let (y, t) = slide(sw, role, x, w.attach[v], scale(g, -step));
+                let (y, t) = if free3d {
+                    let y = add(x, scale(g, -step));
+                    let (q, t, d) = sw.closest(y);
+                    (if d > leave { add(q, scale(sub(y, q), leave / d)) } else { y }, t)
+                } else {
+                    slide(sw, role, x, w.attach[v], scale(g, -step))
+                };
                 let (e1, _) = node_energy(w, v as u32, y, delta);
                 let ok = e1 < e0 - 1e-12 * e0 && {
                     let q = local_eval(w, v as u32, y);

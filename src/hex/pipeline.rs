@@ -107,6 +107,9 @@ pub struct HexOptions {
     /// Optimisation visits the nodes of elements below this scaled Jacobian.
     pub optimise_target: f64,
     pub optimise_passes: usize,
+    /// Where elements stay inverted after optimisation, the surface nodes around them
+    /// may leave the input by this fraction of the bounding-box diagonal (default 0.002).
+    pub release_distance: f64,
     /// Extra random surface samples for the Hausdorff distance.
     pub hausdorff_samples: usize,
     /// Return the mapped mesh when the quality steps end below its minimum scaled
@@ -133,6 +136,7 @@ impl Default for HexOptions {
             smooth_iterations: 20,
             optimise_target: 0.8,
             optimise_passes: 30,
+            release_distance: 0.002,
             hausdorff_samples: 20_000,
             keep_better_mapped: true,
         }
@@ -581,6 +585,38 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         st.moves_tried += p.moves_tried + p2.moves_tried;
         st.moves_accepted += p.moves_accepted + p2.moves_accepted;
     }
+    // where elements are still inverted, the boundary itself is folded: let the
+    // boundary nodes of the bad elements (and their ring) leave the input by a little
+    let mut released_nodes = 0usize;
+    if opts.release_distance > 0.0 && summary(&work.mesh).inverted > 0 {
+        let q = element_qualities(&work.mesh);
+        let mut rel = vec![false; work.mesh.nodes.len()];
+        for (e, el) in work.mesh.elements.iter().enumerate() {
+            if q[e] <= 0.05 || q[e] == super::quality::DEGENERATE {
+                for &v in el {
+                    rel[v as usize] = true;
+                    for &u in work.nbr.of(v as usize) {
+                        rel[u as usize] = true;
+                    }
+                }
+            }
+        }
+        for v in 0..rel.len() {
+            rel[v] &= work.role[v].on_boundary();
+        }
+        released_nodes = rel.iter().filter(|&&b| b).count();
+        let leave = opts.release_distance * diag_w;
+        let keep = (work.mesh.nodes.clone(), work.attach.clone());
+        let q0 = summary(&work.mesh);
+        optimize::mean_ratio_smooth_released(&mut work, &sw, opts.smooth_iterations, None, |_| true, &rel, leave);
+        optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
+        let q1 = summary(&work.mesh);
+        if (q1.inverted, -q1.min) > (q0.inverted, -q0.min) {
+            work.mesh.nodes = keep.0;
+            work.attach = keep.1;
+            released_nodes = 0;
+        }
+    }
     let q_final = summary(&work.mesh);
     stages.push(StageReport {
         stage: "optimisation".into(),
@@ -589,7 +625,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         nodes: work.mesh.nodes.len(),
         elements: work.mesh.elements.len(),
         seconds: t0.elapsed().as_secs_f64(),
-        details: serde_json::to_value(st).unwrap_or_default(),
+        details: serde_json::json!({ "moves": st, "released_boundary_nodes": released_nodes }),
     });
 
     // ---- never worse than the mapped mesh ----
