@@ -80,12 +80,12 @@ pub struct HexOptions {
     /// Largest level (default 4).
     pub max_level: u32,
     /// Stopping rule threshold: largest distance between a mapped midpoint and its
-    /// linear interpolation, relative to the input's bounding-box diagonal (default 0.004).
+    /// linear interpolation, relative to the input's bounding-box diagonal (default 0.005).
     pub threshold: f64,
     /// The stopping rule also stops when the measure of a level is above this fraction
     /// of the previous level's (refining no longer helps; default 0.75).
     pub stall_ratio: f64,
-    /// The level is capped so that the mesh has at most this many elements before pillowing (default 400 000).
+    /// The level is capped so that the mesh has at most this many elements before pillowing (default 200 000).
     pub max_elements: usize,
     /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
     pub feature_angle: f64,
@@ -123,8 +123,8 @@ impl Default for HexOptions {
             level: None,
             min_level: 2,
             max_level: 4,
-            threshold: 0.004,
-            max_elements: 400_000,
+            threshold: 0.005,
+            max_elements: 200_000,
             stall_ratio: 0.75,
             feature_angle: 40.0,
             min_feature_length: 0.03,
@@ -444,7 +444,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
                     relax_and_refit(&mut work, &sw, &bquads, opts, &mut fit_stats);
                 } else {
                     // finer levels inherit it: only the interior is evened out
-                    optimize::untangle(&mut work, &sw, 3, |_| true);
+                    optimize::untangle(&mut work, &sw, 3, |v| role[v] == Role::Interior);
                 }
                 Some(interp)
             }
