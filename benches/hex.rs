@@ -78,6 +78,9 @@ fn run() {
         }
         i += 1;
     }
+    if let Ok(a) = std::env::var("HEX_FEATURE_ANGLE") {
+        opts.feature_angle = a.parse().unwrap();
+    }
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     for (file, labels, _why) in MODELS {
         let mut labels_override: Option<String> = None;

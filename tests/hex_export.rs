@@ -104,3 +104,29 @@ fn pipeline_meshes_round_trip() {
     // the mapped mesh too: it has elements of every quality down to nearly flat ones
     write_all("hole_level1_mapped", &r.mapped);
 }
+
+#[test]
+fn run_folder_files_and_report_keys() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    let mesh = TriMesh::load(dir.join("cinolib_torus.obj"), &LoadOptions::default()).unwrap();
+    let input = HexInput::from_user_mesh(&mesh, Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()).unwrap();
+    let r = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut NoProgress).unwrap();
+    let out = fixtures().join("run");
+    std::fs::create_dir_all(&out).unwrap();
+    sddpm::hex::write_hex_files(&out, &r).unwrap();
+    let j = sddpm::hex::report_json(&r);
+    for key in ["vertices", "elements", "min_scaled_jacobian", "mean_scaled_jacobian", "inverted", "hausdorff_relative", "file"] {
+        assert!(j.get(key).is_some(), "report.json hex.{key} missing");
+    }
+    assert_eq!(j["file"], "hex.vtu");
+    assert_eq!(j["elements"].as_u64().unwrap() as usize, r.mesh.elements.len());
+    let (v, data) = read_vtu(&out.join("hex.vtu")).unwrap();
+    assert_eq!(v, r.mesh);
+    assert_eq!(data[0].1, r.scaled_jacobian);
+    assert_eq!(read_vtk_legacy(&out.join("hex.vtk")).unwrap(), r.mesh);
+    assert_eq!(read_medit(&out.join("hex.mesh")).unwrap(), r.mesh);
+    assert_eq!(read_lsdyna(&out.join("hex.k")).unwrap().elements, r.mesh.elements);
+    // the report serialises
+    let text = serde_json::to_string(&j).unwrap();
+    assert!(text.contains("\"stages\""));
+}

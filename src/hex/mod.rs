@@ -10,11 +10,13 @@ pub mod optimize;
 pub mod pillow;
 pub mod pipeline;
 pub mod quality;
+pub mod report;
 pub mod surface;
 pub mod topology;
 
 pub use frame::Affine;
 pub use pipeline::{build_hex_mesh, HexInput, HexOptions, HexResult, LevelReport, StageReport, SurfaceMapReport};
+pub use report::{report_json, write_hex_files};
 
 use serde::{Deserialize, Serialize};
 

@@ -92,6 +92,9 @@ pub struct HexOptions {
     /// Feature curves shorter than this fraction of the bounding-box diagonal are
     /// ignored (default 0.03).
     pub min_feature_length: f64,
+    /// Feature curves whose median dihedral angle (degrees) is below this are ignored
+    /// (default 60: creases of CAD parts, not facets of a coarse smooth surface).
+    pub feature_median_angle: f64,
     /// Turning angle (degrees) that makes a feature-curve vertex a corner (default 45).
     pub corner_angle: f64,
     /// Relaxation iterations of the surface map on level 0 (later levels use a third).
@@ -128,6 +131,7 @@ impl Default for HexOptions {
             stall_ratio: 0.75,
             feature_angle: 40.0,
             min_feature_length: 0.03,
+            feature_median_angle: 60.0,
             corner_angle: 45.0,
             surface_relax_iterations: 30,
             use_correspondence: true,
@@ -330,7 +334,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
     let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
     let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
-    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0);
+    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0, opts.feature_median_angle);
     let sn = Surface::new(mesh_n, features.clone());
     let sw = Surface::new(mesh_w, features);
     let diag_w = sw.bbox.diagonal();

@@ -130,16 +130,51 @@ pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Feature
     Features { curves, corners }
 }
 
-/// Drop feature curves shorter than `min_length` (noise of coarse or organic
-/// tessellations) and keep as corners only the vertices where at least three kept
+/// Drop feature curves shorter than `min_length` or whose median dihedral angle is
+/// below `min_median_angle` degrees (noise of coarse or organic tessellations, where
+/// single edges cross the threshold but the surface has no crease) and keep as corners only the vertices where at least three kept
 /// curves end, or two kept curves meet at a turn.
-pub fn prune_features(mesh: &TriMesh, f: Features, min_length: f64) -> Features {
+pub fn prune_features(mesh: &TriMesh, f: Features, min_length: f64, min_median_angle: f64) -> Features {
+    // dihedral angle of every edge used by a curve
+    let mut edge_tris: HashMap<[u32; 2], Vec<u32>> = HashMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edge_tris.entry(if a < b { [a, b] } else { [b, a] }).or_default().push(t as u32);
+        }
+    }
+    let tri_n = |t: u32| {
+        let tr = mesh.triangles[t as usize];
+        let n = tri_normal(mesh.vertices[tr[0] as usize], mesh.vertices[tr[1] as usize], mesh.vertices[tr[2] as usize]);
+        let l = norm(n);
+        if l > 0.0 {
+            scale(n, 1.0 / l)
+        } else {
+            n
+        }
+    };
+    let median_angle = |c: &Curve| -> f64 {
+        let n = c.vertices.len();
+        let segs = if c.closed { n } else { n - 1 };
+        let mut a: Vec<f64> = (0..segs)
+            .map(|k| {
+                let (u, v) = (c.vertices[k], c.vertices[(k + 1) % n]);
+                match edge_tris.get(&if u < v { [u, v] } else { [v, u] }) {
+                    Some(ts) if ts.len() == 2 => dot(tri_n(ts[0]), tri_n(ts[1])).clamp(-1.0, 1.0).acos().to_degrees(),
+                    _ => 180.0,
+                }
+            })
+            .collect();
+        a.sort_by(|x, y| x.total_cmp(y));
+        a[a.len() / 2]
+    };
     let len = |c: &Curve| {
         let n = c.vertices.len();
         let segs = if c.closed { n } else { n - 1 };
         (0..segs).map(|k| norm(sub(mesh.vertices[c.vertices[(k + 1) % n] as usize], mesh.vertices[c.vertices[k] as usize]))).sum::<f64>()
     };
-    let curves: Vec<Curve> = f.curves.into_iter().filter(|c| len(c) >= min_length).collect();
+    let curves: Vec<Curve> =
+        f.curves.into_iter().filter(|c| len(c) >= min_length && median_angle(c) >= min_median_angle).collect();
     let mut ends: HashMap<u32, usize> = HashMap::new();
     for c in curves.iter().filter(|c| !c.closed) {
         *ends.entry(c.vertices[0]).or_default() += 1;
