@@ -170,6 +170,10 @@ pub struct LevelReport {
     /// level maps it, relative to the bounding-box diagonal (None when the next level
     /// was not computed).
     pub deviation: Option<f64>,
+    /// Boundary quads whose normal opposes the input's, and inverted elements, of
+    /// this level's map.
+    pub flipped_quads: usize,
+    pub inverted: usize,
     pub seconds: f64,
 }
 
@@ -265,6 +269,20 @@ fn element_targets(h: &LatticeHex, warp: &map::Warp, to_w: &Affine) -> Vec<[f64;
             std::array::from_fn(|a| (ext[a] * col[a]).max(1e-12))
         })
         .collect()
+}
+
+/// Boundary quads whose normal opposes the normal of the input at their centre.
+fn flipped_quads(sw: &Surface, pos: &[[f64; 3]], quads: &[[u32; 4]]) -> usize {
+    quads
+        .par_iter()
+        .filter(|q| {
+            let p = q.map(|i| pos[i as usize]);
+            let nq = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+            let c = scale(p.iter().fold([0.0; 3], |a, x| add(a, *x)), 0.25);
+            let (_, t, _) = sw.closest(c);
+            dot(nq, sw.normal(t)) < 0.0
+        })
+        .count()
 }
 
 struct Level {
@@ -456,7 +474,17 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         let pos = work.mesh.nodes;
         let attach = work.attach;
         let cur = Level { h, pos, attach, role, curve_nb, bquads };
-        let rep = LevelReport { level: l, nodes: cur.pos.len(), elements: cur.h.mesh.elements.len(), deviation: None, seconds: t0.elapsed().as_secs_f64() };
+        let flipped = flipped_quads(&sw, &cur.pos, &cur.bquads);
+        let inverted = summary(&HexMesh { nodes: cur.pos.clone(), elements: cur.h.mesh.elements.clone() }).inverted;
+        let rep = LevelReport {
+            level: l,
+            nodes: cur.pos.len(),
+            elements: cur.h.mesh.elements.len(),
+            deviation: None,
+            flipped_quads: flipped,
+            inverted,
+            seconds: t0.elapsed().as_secs_f64(),
+        };
         // the stopping rule for the previous level
         if let (Some(pv), Some(interp)) = (prev.as_ref(), interp.as_ref()) {
             // chord height: how far the linearly interpolated boundary midpoints are from
@@ -475,7 +503,10 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             // a measure that no longer shrinks means refining does not resolve what is
             // left (sharp features no polycube edge follows): stop there as well
             let stalled = k >= 1 && levels[k - 1].deviation.is_some_and(|d0| dev > opts.stall_ratio * d0);
-            if opts.level.is_none() && pv.h.level >= min_level && (dev <= opts.threshold || stalled) {
+            // refining must not fold the map: a finer level with more flipped boundary
+            // quads than this one is not taken
+            let folds = rep.flipped_quads > levels[k].flipped_quads;
+            if opts.level.is_none() && pv.h.level >= min_level && (dev <= opts.threshold || stalled || folds) {
                 levels.push(rep);
                 chosen = prev.take();
                 break;
@@ -505,20 +536,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         target: element_targets(&lv.h, &warp, &to_w),
     };
     work.rebuild();
-    let quad_nrm = |m: &HexMesh, attach: &[u32], quads: &[[u32; 4]]| -> usize {
-        quads
-            .iter()
-            .filter(|q| {
-                let p = q.map(|i| m.nodes[i as usize]);
-                let nq = cross(sub(p[2], p[0]), sub(p[3], p[1]));
-                let c = scale(p.iter().fold([0.0; 3], |a, x| add(a, *x)), 0.25);
-                let _ = attach;
-                let (_, t, _) = sw.closest(c);
-                dot(nq, sw.normal(t)) < 0.0
-            })
-            .count()
-    };
-    smap.flipped_quads = quad_nrm(&work.mesh, &work.attach, &lv.bquads);
+    smap.flipped_quads = flipped_quads(&sw, &work.mesh.nodes, &lv.bquads);
     let mapped = work.mesh.clone();
     let q_mapped = summary(&mapped);
     let mut stages = vec![StageReport {
