@@ -503,9 +503,10 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             // a measure that no longer shrinks means refining does not resolve what is
             // left (sharp features no polycube edge follows): stop there as well
             let stalled = k >= 1 && levels[k - 1].deviation.is_some_and(|d0| dev > opts.stall_ratio * d0);
-            // refining must not fold the map: a finer level with more flipped boundary
-            // quads than this one is not taken
-            let folds = rep.flipped_quads > levels[k].flipped_quads;
+            // refining must not fold the map: a finer level whose share of flipped
+            // boundary quads is above twice this one's plus 0.2 % is not taken
+            let frac = |f: usize, q: usize| f as f64 / q.max(1) as f64;
+            let folds = frac(rep.flipped_quads, cur.bquads.len()) > 2.0 * frac(levels[k].flipped_quads, pv.bquads.len()) + 0.002;
             if opts.level.is_none() && pv.h.level >= min_level && (dev <= opts.threshold || stalled || folds) {
                 levels.push(rep);
                 chosen = prev.take();
