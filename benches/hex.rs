@@ -18,6 +18,7 @@ const MODELS: &[(&str, &str, &str)] = &[
     ("cinolib_torus.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "torus, hole along the smallest axis"),
     ("trimesh_round.stl", "THC+X,THC+X,THC+X,0,0,0,0,0,0,0,0,0", "thin tube, bore along the long axis"),
     ("cgal_dragknob.off", "BHC+Z,0,0,0,0,0,0,0,0,0,0,0", "knob with a blind recess"),
+    ("cgal_dragknob.off", "cube,0,0,0,0,0,0,0,0,0,0,0", "knob, recess left to the surface map"),
     ("cgal_spool.off", "BHC+Z,0,0,0,0,0,0,0,0,0,0,0", "spool with a blind recess"),
     ("cinolib_cube_minus_sphere.obj", "cube,0,0,0,0,0,0,0,0,0,0,0", "cube with a spherical bite (axes kept)"),
     ("mambo_B0.obj", "cube,cube,0,0,0,0,0,0,0,0,0,0", "block with a channel"),
