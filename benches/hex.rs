@@ -216,7 +216,7 @@ fn run() {
             }
         }
         for l in &r.levels {
-            println!("    level {} elements {} dev {:?} {:.2}s", l.level, l.elements, l.deviation, l.seconds);
+            println!("    level {} elements {} dev {:?} flipped {} inverted {} {:.2}s", l.level, l.elements, l.deviation, l.flipped_quads, l.inverted, l.seconds);
         }
         println!("    map {:?}", r.surface_map);
         if let Ok(v) = std::env::var("HEX_NODE") {
