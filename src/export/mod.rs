@@ -3,5 +3,6 @@
 pub mod obj;
 pub mod vtk;
 pub mod bext;
+pub mod hexfmt;
 pub mod lsdyna;
 pub mod spline_vtk;

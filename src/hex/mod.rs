@@ -1,7 +1,22 @@
 //! All-hex control mesh: parametric mapping of the polycube, octree subdivision,
-//! pillowing, smoothing and Jacobian optimisation (issue 6).
+//! pillowing, smoothing and Jacobian optimisation (issue 6). docs/hex.md describes
+//! the method, the frames and every default.
 
+pub mod distance;
+pub mod frame;
+pub mod grid;
+pub mod map;
+pub mod optimize;
+pub mod pillow;
+pub mod pipeline;
 pub mod quality;
+pub mod report;
+pub mod surface;
+pub mod topology;
+
+pub use frame::Affine;
+pub use pipeline::{build_hex_mesh, HexInput, HexOptions, HexResult, LevelReport, StageReport, SurfaceMapReport};
+pub use report::{report_json, write_hex_files};
 
 use serde::{Deserialize, Serialize};
 

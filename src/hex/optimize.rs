@@ -1,0 +1,657 @@
+//! Quality improvement on a hex mesh whose boundary nodes are tied to the input:
+//! smart Laplacian smoothing and a local max-min optimisation of the Verdict
+//! scaled Jacobian (which also untangles: it raises negative terms first).
+//!
+//! Every node move keeps its constraint: interior nodes move freely, surface nodes
+//! slide in the tangent plane and are projected back onto the input, curve nodes
+//! slide along their feature curve, corner nodes never move. A move is kept only
+//! when the smallest scaled Jacobian of the node's elements does not drop (the
+//! smoothing accepts a drop down to a floor), so neither stage can lower the
+//! minimum of the mesh.
+
+use super::map::{slide, Attach, Role};
+use super::quality::{scaled_jacobian, DEGENERATE};
+use super::surface::Surface;
+use super::topology::Csr;
+use super::HexMesh;
+use crate::geometry::vec3::*;
+
+/// A mesh being improved, with what ties its nodes to the input.
+#[derive(Debug, Clone)]
+pub struct Work {
+    pub mesh: HexMesh,
+    pub role: Vec<Role>,
+    pub attach: Vec<Attach>,
+    /// Neighbours along the feature curve (curve nodes only).
+    pub curve_nb: Vec<Vec<u32>>,
+    /// Boundary-surface neighbours (boundary nodes only).
+    pub bgraph: Csr,
+    /// Edge neighbours.
+    pub nbr: Csr,
+    /// Node -> elements.
+    pub n2e: Csr,
+    /// Per element: edge lengths of its target box along its axes u (0->1), v (0->3),
+    /// w (0->4): the polycube lattice element under the map to the working frame.
+    pub target: Vec<[f64; 3]>,
+}
+
+impl Work {
+    /// Recompute the connectivity after a topology change.
+    pub fn rebuild(&mut self) {
+        let e = super::topology::edges(&self.mesh);
+        self.nbr = super::topology::node_neighbours(self.mesh.nodes.len(), &e);
+        self.n2e = super::topology::node_elements(&self.mesh);
+        let quads: Vec<[u32; 4]> =
+            super::topology::boundary_quads(&self.mesh).map(|b| b.into_iter().map(|q| q.nodes).collect()).unwrap_or_default();
+        self.bgraph = super::map::boundary_graph(self.mesh.nodes.len(), &quads);
+    }
+}
+
+#[inline]
+fn q(v: f64) -> f64 {
+    if v == DEGENERATE {
+        -1.0
+    } else {
+        v
+    }
+}
+
+/// Scaled Jacobian of element `e` with node `v` placed at `x`.
+fn element_sj_with(m: &HexMesh, e: usize, v: u32, x: [f64; 3]) -> f64 {
+    let el = m.elements[e];
+    let p: [[f64; 3]; 8] = std::array::from_fn(|k| if el[k] == v { x } else { m.nodes[el[k] as usize] });
+    q(scaled_jacobian(&p))
+}
+
+/// Smallest scaled Jacobian of the elements of node v with v at x.
+pub fn local_min(w: &Work, v: u32, x: [f64; 3]) -> f64 {
+    local_eval(w, v, x).0
+}
+
+/// Smallest scaled Jacobian of the elements of node v with v at x, and how many of
+/// them are inverted (scaled Jacobian <= 0).
+pub fn local_eval(w: &Work, v: u32, x: [f64; 3]) -> (f64, usize) {
+    let mut m = f64::INFINITY;
+    let mut bad = 0;
+    for &e in w.n2e.of(v as usize) {
+        let s = element_sj_with(&w.mesh, e as usize, v, x);
+        m = m.min(s);
+        if s <= 0.0 {
+            bad += 1;
+        }
+    }
+    (m, bad)
+}
+
+/// Is `after` better than `before` (a larger minimum and no more inverted elements)?
+#[inline]
+fn better(after: (f64, usize), before: (f64, usize)) -> bool {
+    after.0 > before.0 + 1e-9 && after.1 <= before.1
+}
+
+const CORNERS: [[usize; 4]; 8] = super::quality::CORNERS;
+
+/// Value and gradient (w.r.t. the position of local node `m`) of one normalised
+/// determinant term with vectors a, b, c whose coefficients of node m are `alpha`.
+#[inline]
+fn term_grad(a: [f64; 3], b: [f64; 3], c: [f64; 3], alpha: [f64; 3]) -> Option<(f64, [f64; 3])> {
+    let (la, lb, lc) = (dot(a, a), dot(b, b), dot(c, c));
+    if la <= 1e-300 || lb <= 1e-300 || lc <= 1e-300 {
+        return None;
+    }
+    let s = 1.0 / (la * lb * lc).sqrt();
+    let bc = cross(b, c);
+    let t = dot(a, bc) * s;
+    let ga = sub(scale(bc, s), scale(a, t / la));
+    let gb = sub(scale(cross(c, a), s), scale(b, t / lb));
+    let gc = sub(scale(cross(a, b), s), scale(c, t / lc));
+    let g = add(add(scale(ga, alpha[0]), scale(gb, alpha[1])), scale(gc, alpha[2]));
+    Some((t, g))
+}
+
+/// The nine Verdict terms of an element with node index m (0..8) and their gradients
+/// w.r.t. node m (zero for the terms that do not involve it).
+fn element_terms(p: &[[f64; 3]; 8], m: usize, out: &mut Vec<(f64, [f64; 3])>) {
+    for c in CORNERS {
+        let alpha = if c[0] == m {
+            [-1.0, -1.0, -1.0]
+        } else if c[1] == m {
+            [1.0, 0.0, 0.0]
+        } else if c[2] == m {
+            [0.0, 1.0, 0.0]
+        } else if c[3] == m {
+            [0.0, 0.0, 1.0]
+        } else {
+            [0.0; 3]
+        };
+        let o = p[c[0]];
+        if let Some(r) = term_grad(sub(p[c[1]], o), sub(p[c[2]], o), sub(p[c[3]], o), alpha) {
+            out.push(r);
+        } else {
+            out.push((-1.0, [0.0; 3]));
+        }
+    }
+    let x1 = add(add(sub(p[1], p[0]), sub(p[2], p[3])), add(sub(p[5], p[4]), sub(p[6], p[7])));
+    let x2 = add(add(sub(p[3], p[0]), sub(p[2], p[1])), add(sub(p[7], p[4]), sub(p[6], p[5])));
+    let x3 = add(add(sub(p[4], p[0]), sub(p[5], p[1])), add(sub(p[6], p[2]), sub(p[7], p[3])));
+    let s1 = if matches!(m, 1 | 2 | 5 | 6) { 1.0 } else { -1.0 };
+    let s2 = if matches!(m, 2 | 3 | 6 | 7) { 1.0 } else { -1.0 };
+    let s3 = if m >= 4 { 1.0 } else { -1.0 };
+    if let Some(r) = term_grad(x1, x2, x3, [s1, s2, s3]) {
+        out.push(r);
+    } else {
+        out.push((-1.0, [0.0; 3]));
+    }
+}
+
+/// Gradient of the soft minimum (temperature 1/beta) of all terms of the elements of v.
+fn softmin_gradient(w: &Work, v: u32, beta: f64, buf: &mut Vec<(f64, [f64; 3])>) -> [f64; 3] {
+    buf.clear();
+    for &e in w.n2e.of(v as usize) {
+        let el = w.mesh.elements[e as usize];
+        let p: [[f64; 3]; 8] = std::array::from_fn(|k| w.mesh.nodes[el[k] as usize]);
+        let m = el.iter().position(|&x| x == v).unwrap();
+        element_terms(&p, m, buf);
+    }
+    let tmin = buf.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let mut g = [0.0; 3];
+    let mut ws = 0.0;
+    for (t, gt) in buf.iter() {
+        let wt = (-beta * (t - tmin)).exp();
+        ws += wt;
+        g = add(g, scale(*gt, wt));
+    }
+    if ws > 0.0 {
+        scale(g, 1.0 / ws)
+    } else {
+        g
+    }
+}
+
+fn mean_edge(w: &Work, v: usize) -> f64 {
+    let nb = w.nbr.of(v);
+    if nb.is_empty() {
+        return 0.0;
+    }
+    nb.iter().map(|&u| norm(sub(w.mesh.nodes[u as usize], w.mesh.nodes[v]))).sum::<f64>() / nb.len() as f64
+}
+
+/// Per-node report of a stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct MoveStats {
+    pub passes: usize,
+    pub moves_tried: usize,
+    pub moves_accepted: usize,
+}
+
+/// Smart Laplacian smoothing: every movable node goes towards the average of its
+/// neighbours (surface / curve neighbours for boundary nodes) when that keeps the
+/// smallest scaled Jacobian of its elements at or above min(before, floor).
+pub fn smooth(w: &mut Work, sw: &Surface, iterations: usize, floor: f64) -> MoveStats {
+    smooth_nodes(w, sw, iterations, floor, false)
+}
+
+/// [`smooth`], optionally on interior nodes only.
+pub fn smooth_nodes(w: &mut Work, sw: &Surface, iterations: usize, floor: f64, interior_only: bool) -> MoveStats {
+    let mut st = MoveStats::default();
+    let n = w.mesh.nodes.len();
+    for _ in 0..iterations {
+        st.passes += 1;
+        let mut moved = 0usize;
+        for v in 0..n {
+            let role = w.role[v];
+            if interior_only && role != Role::Interior {
+                continue;
+            }
+            let nb: &[u32] = match role {
+                Role::Corner(_) => continue,
+                Role::Interior => w.nbr.of(v),
+                Role::Free => w.bgraph.of(v),
+                Role::Curve(_) => &w.curve_nb[v],
+            };
+            if nb.is_empty() {
+                continue;
+            }
+            let x = w.mesh.nodes[v];
+            let avg = scale(nb.iter().fold([0.0; 3], |a, &u| add(a, w.mesh.nodes[u as usize])), 1.0 / nb.len() as f64);
+            let d = sub(avg, x);
+            if norm(d) < 1e-12 * (1.0 + norm(x)) {
+                continue;
+            }
+            let before = local_eval(w, v as u32, x);
+            let (y, t) = slide(sw, role, x, w.attach[v], d);
+            st.moves_tried += 1;
+            let after = local_eval(w, v as u32, y);
+            if after.0 >= before.0.min(floor) && after.1 <= before.1 {
+                w.mesh.nodes[v] = y;
+                w.attach[v] = t;
+                st.moves_accepted += 1;
+                moved += 1;
+            }
+        }
+        if moved == 0 {
+            break;
+        }
+    }
+    st
+}
+
+/// Local max-min optimisation of the scaled Jacobian. Visits, worst first, the nodes of
+/// elements whose scaled Jacobian is below `target`; each visit takes a few steps along
+/// the gradient of a soft minimum of the node's terms (projected on the surface / curve
+/// for boundary nodes) and keeps a step only when the true minimum over the node's
+/// elements increases. Stops after `max_passes` or when a pass changes nothing.
+pub fn optimise(w: &mut Work, sw: &Surface, target: f64, max_passes: usize, cancel: impl FnMut(usize) -> bool) -> MoveStats {
+    optimise_nodes(w, sw, target, max_passes, false, cancel)
+}
+
+/// [`optimise`], optionally on interior nodes only.
+pub fn optimise_nodes(
+    w: &mut Work,
+    sw: &Surface,
+    target: f64,
+    max_passes: usize,
+    interior_only: bool,
+    mut cancel: impl FnMut(usize) -> bool,
+) -> MoveStats {
+    let mut st = MoveStats::default();
+    let n = w.mesh.nodes.len();
+    let mut buf = Vec::with_capacity(128);
+    let mut quality: Vec<f64> =
+        (0..w.mesh.elements.len()).map(|e| q(scaled_jacobian(&w.mesh.element_corners(e)))).collect();
+    for pass in 0..max_passes {
+        if cancel(pass) {
+            break;
+        }
+        st.passes += 1;
+        // active nodes, worst first: the elements in the tail above the current minimum
+        let gmin = quality.iter().copied().fold(f64::INFINITY, f64::min);
+        let threshold = target.min(gmin.max(-1.0) + 0.15);
+        let mut node_q = vec![f64::INFINITY; n];
+        for (e, el) in w.mesh.elements.iter().enumerate() {
+            if quality[e] < threshold {
+                for &v in el {
+                    node_q[v as usize] = node_q[v as usize].min(quality[e]);
+                }
+            }
+        }
+        let mut active: Vec<usize> =
+            (0..n)
+                .filter(|&v| node_q[v].is_finite() && !matches!(w.role[v], Role::Corner(_)))
+                .filter(|&v| !interior_only || w.role[v] == Role::Interior)
+                .collect();
+        if active.is_empty() {
+            break;
+        }
+        active.sort_by(|&a, &b| node_q[a].total_cmp(&node_q[b]).then(a.cmp(&b)));
+        let mut improved = 0usize;
+        for &v in &active {
+            let role = w.role[v];
+            let h = mean_edge(w, v);
+            if !(h > 0.0) {
+                continue;
+            }
+            let mut cur = local_eval(w, v as u32, w.mesh.nodes[v]);
+            let mut beta = 40.0;
+            for _step in 0..4 {
+                let mut g = softmin_gradient(w, v as u32, beta, &mut buf);
+                if role.on_boundary() {
+                    // tangential part only (the slide projects back anyway)
+                    let t = w.attach[v];
+                    if let Role::Free = role {
+                        let nrm = if t != u32::MAX { sw.normal(t) } else { sw.normal(sw.closest(w.mesh.nodes[v]).1) };
+                        g = sub(g, scale(nrm, dot(g, nrm)));
+                    }
+                }
+                let gl = norm(g);
+                if !(gl > 1e-14) {
+                    break;
+                }
+                let dir = scale(g, 1.0 / gl);
+                let mut s = 0.25 * h;
+                let mut accepted = false;
+                for _ls in 0..7 {
+                    st.moves_tried += 1;
+                    let x = w.mesh.nodes[v];
+                    let (y, t) = slide(sw, role, x, w.attach[v], scale(dir, s));
+                    let val = local_eval(w, v as u32, y);
+                    if better(val, cur) {
+                        w.mesh.nodes[v] = y;
+                        w.attach[v] = t;
+                        cur = val;
+                        accepted = true;
+                        st.moves_accepted += 1;
+                        break;
+                    }
+                    s *= 0.5;
+                }
+                if !accepted {
+                    if beta < 400.0 {
+                        beta *= 4.0;
+                        continue;
+                    }
+                    break;
+                }
+                improved += 1;
+            }
+            for &e in w.n2e.of(v) {
+                quality[e as usize] = q(scaled_jacobian(&w.mesh.element_corners(e as usize)));
+            }
+        }
+        if improved == 0 {
+            break;
+        }
+    }
+    st
+}
+
+/// Smallest cosine between the mesh boundary normal and the normal of the triangle a
+/// boundary node is pulled to.
+pub const FIT_FACING: f64 = 0.3;
+
+/// What fitting did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct FitStats {
+    pub rounds: usize,
+    /// Boundary moves kept / tried.
+    pub pulls_accepted: usize,
+    pub pulls_tried: usize,
+    /// Largest distance of a boundary node from its target before the final snap (relative to the surface diagonal).
+    pub residual_before_snap: f64,
+}
+
+/// Pull the boundary of a valid mesh onto the surface in small steps that keep it valid.
+///
+/// Each round moves every boundary node part of the way to its target (the closest
+/// surface point among triangles facing like the mesh boundary there, its curve, its
+/// corner) plus a tangential Laplacian step that keeps the boundary nodes spread; a
+/// move is kept only when the node's elements keep a scaled Jacobian of at least
+/// min(before, floor) (halving the step twice before giving up). After the boundary,
+/// the interior is smoothed and optimised. The last round snaps every boundary node
+/// onto its target whatever that does to quality (the later stages repair).
+pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: usize, floor: f64) -> FitStats {
+    let n = w.mesh.nodes.len();
+    let bnodes: Vec<usize> = (0..n).filter(|&v| w.role[v].on_boundary()).collect();
+    let mut st = FitStats::default();
+    let diag = sw.bbox.diagonal();
+    for r in 0..rounds {
+        st.rounds += 1;
+        let alpha = (0.2 + 0.8 * (r + 1) as f64 / rounds as f64).min(1.0);
+        let nrm = super::map::quad_normals(n, bquads, &w.mesh.nodes);
+        let mut maxres: f64 = 0.0;
+        for &v in &bnodes {
+            let role = w.role[v];
+            let x = w.mesh.nodes[v];
+            let (target, tri) = match role {
+                Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
+                Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
+                Role::Free => {
+                    let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
+                    (q, t)
+                }
+                Role::Interior => continue,
+            };
+            maxres = maxres.max(norm(sub(target, x)));
+            // tangential spreading (Free and Curve nodes)
+            let nb: &[u32] = match role {
+                Role::Curve(_) => &w.curve_nb[v],
+                Role::Free => w.bgraph.of(v),
+                _ => &[],
+            };
+            let mut d = scale(sub(target, x), alpha);
+            if !nb.is_empty() {
+                let avg = scale(nb.iter().fold([0.0; 3], |a, &u| add(a, w.mesh.nodes[u as usize])), 1.0 / nb.len() as f64);
+                let mut lap = sub(avg, x);
+                let nn = if tri != u32::MAX { sw.normal(tri) } else { nrm[v] };
+                lap = sub(lap, scale(nn, dot(lap, nn)));
+                d = add(d, scale(lap, 0.3));
+            }
+            let before = local_eval(w, v as u32, x);
+            for k in 0..3 {
+                st.pulls_tried += 1;
+                let y = add(x, scale(d, 0.5f64.powi(k)));
+                let after = local_eval(w, v as u32, y);
+                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
+                    w.mesh.nodes[v] = y;
+                    w.attach[v] = tri;
+                    st.pulls_accepted += 1;
+                    break;
+                }
+            }
+        }
+        st.residual_before_snap = maxres / diag;
+        smooth_nodes(w, sw, 2, floor, true);
+        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
+    }
+    // final snap
+    let nrm = super::map::quad_normals(n, bquads, &w.mesh.nodes);
+    let mut maxres: f64 = 0.0;
+    for &v in &bnodes {
+        let x = w.mesh.nodes[v];
+        let (target, tri) = match w.role[v] {
+            Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
+            Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
+            Role::Free => {
+                let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
+                (q, t)
+            }
+            Role::Interior => continue,
+        };
+        maxres = maxres.max(norm(sub(target, x)));
+        w.mesh.nodes[v] = target;
+        w.attach[v] = tri;
+    }
+    st.residual_before_snap = maxres / diag;
+    st
+}
+
+/// Axis (0 = u: node 0 -> 1, 1 = v: 0 -> 3, 2 = w: 0 -> 4) of each edge of each Verdict corner.
+const CORNER_AXES: [[usize; 3]; 8] = {
+    const UNIT: [[i32; 3]; 8] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+    let mut out = [[0usize; 3]; 8];
+    let mut c = 0;
+    while c < 8 {
+        let mut k = 0;
+        while k < 3 {
+            let a = UNIT[CORNERS[c][0]];
+            let b = UNIT[CORNERS[c][k + 1]];
+            let mut ax = 0;
+            while ax < 3 {
+                if a[ax] != b[ax] {
+                    out[c][k] = ax;
+                }
+                ax += 1;
+            }
+            k += 1;
+        }
+        c += 1;
+    }
+    out
+};
+
+/// Mean-ratio energy of one corner with edge vectors a, b, c measured against a target
+/// box with edge lengths `d` along the element's axes (`axes` says which axis each edge
+/// follows), with the modified determinant h(s) = (s + sqrt(s^2 + 4 delta^2)) / 2 of
+/// Escobar et al. (2003) so that inverted corners have a finite, smooth energy:
+/// eta = (|a|^2/d_a^2 + |b|^2/d_b^2 + |c|^2/d_c^2) / (3 h(det(a, b, c) / (d0 d1 d2))^(2/3)).
+/// eta = 1 exactly for the target box. Returns eta and d eta / d(a, b, c).
+#[inline]
+fn corner_energy(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3], axes: [usize; 3], delta: f64) -> (f64, [[f64; 3]; 3]) {
+    let (wa, wb, wc) = (1.0 / (d[axes[0]] * d[axes[0]]), 1.0 / (d[axes[1]] * d[axes[1]]), 1.0 / (d[axes[2]] * d[axes[2]]));
+    let vol = d[0] * d[1] * d[2];
+    let f = wa * dot(a, a) + wb * dot(b, b) + wc * dot(c, c);
+    let bc = cross(b, c);
+    let s = dot(a, bc) / vol;
+    let r = (s * s + 4.0 * delta * delta).sqrt();
+    let h = 0.5 * (s + r);
+    if !(h > 0.0) {
+        return (f64::INFINITY, [[0.0; 3]; 3]);
+    }
+    let h23 = h.powf(2.0 / 3.0);
+    let eta = f / (3.0 * h23);
+    let dh = if r > 0.0 { 0.5 * (1.0 + s / r) } else { 1.0 };
+    let k1 = 2.0 / (3.0 * h23);
+    let k2 = (2.0 / 9.0) * f / (h23 * h) * dh / vol;
+    let ga = sub(scale(a, k1 * wa), scale(bc, k2));
+    let gb = sub(scale(b, k1 * wb), scale(cross(c, a), k2));
+    let gc = sub(scale(c, k1 * wc), scale(cross(a, b), k2));
+    (eta, [ga, gb, gc])
+}
+
+/// Energy of node v at x over the corners of its elements that involve it, and its gradient.
+fn node_energy(w: &Work, v: u32, x: [f64; 3], delta: f64) -> (f64, [f64; 3]) {
+    let mut e_sum = 0.0;
+    let mut g = [0.0; 3];
+    for &e in w.n2e.of(v as usize) {
+        let el = w.mesh.elements[e as usize];
+        let d = w.target.get(e as usize).copied().unwrap_or([1.0; 3]);
+        let p: [[f64; 3]; 8] = std::array::from_fn(|k| if el[k] == v { x } else { w.mesh.nodes[el[k] as usize] });
+        let m = el.iter().position(|&u| u == v).unwrap();
+        for (ci, cn) in CORNERS.iter().enumerate() {
+            let Some(role) = cn.iter().position(|&k| k == m) else { continue };
+            let o = p[cn[0]];
+            let (eta, gr) = corner_energy(sub(p[cn[1]], o), sub(p[cn[2]], o), sub(p[cn[3]], o), d, CORNER_AXES[ci], delta);
+            e_sum += eta;
+            if !eta.is_finite() {
+                continue;
+            }
+            let dg = match role {
+                0 => scale(add(add(gr[0], gr[1]), gr[2]), -1.0),
+                k => gr[k - 1],
+            };
+            g = add(g, dg);
+        }
+    }
+    (e_sum, g)
+}
+
+/// Smallest and mean corner determinant (relative to the target boxes) of the elements of v.
+fn rel_dets(w: &Work, v: u32) -> (f64, f64) {
+    let mut m = f64::INFINITY;
+    let mut sum = 0.0;
+    let mut n = 0.0;
+    for &e in w.n2e.of(v as usize) {
+        let p = w.mesh.element_corners(e as usize);
+        let d = w.target.get(e as usize).copied().unwrap_or([1.0; 3]);
+        let vol = d[0] * d[1] * d[2];
+        for cn in CORNERS {
+            let o = p[cn[0]];
+            let s = dot(sub(p[cn[1]], o), cross(sub(p[cn[2]], o), sub(p[cn[3]], o))) / vol;
+            m = m.min(s);
+            sum += s.abs();
+            n += 1.0;
+        }
+    }
+    (m, if n > 0.0 { sum / n } else { 0.0 })
+}
+
+/// Untangling and smoothing by the target mean-ratio energy of the corners:
+/// [`mean_ratio_smooth`] without a quality floor.
+pub fn untangle(w: &mut Work, sw: &Surface, passes: usize, nodes_filter: impl Fn(usize) -> bool) -> MoveStats {
+    mean_ratio_smooth(w, sw, passes, None, nodes_filter)
+}
+
+/// Gauss-Seidel passes over the movable nodes minimising the target mean-ratio energy
+/// of their corners (boundary nodes tangentially, then back onto the surface / curve),
+/// steepest descent with backtracking. A move is kept when the node's energy decreases,
+/// its valid elements stay valid, and with `floor = Some(f)` when the smallest scaled
+/// Jacobian of its elements stays at least min(before, f). The first pass visits every
+/// node, later passes only the neighbourhood of nodes that moved.
+pub fn mean_ratio_smooth(
+    w: &mut Work,
+    sw: &Surface,
+    passes: usize,
+    floor: Option<f64>,
+    nodes_filter: impl Fn(usize) -> bool,
+) -> MoveStats {
+    mean_ratio_smooth_released(w, sw, passes, floor, nodes_filter, &[], 0.0)
+}
+
+/// [`mean_ratio_smooth`] where the surface / curve nodes flagged in `released` may
+/// leave the input by at most `leave` (they move freely, then are pulled back to
+/// within `leave` of their closest surface point): the trade of a little surface fit
+/// for validity where the boundary itself is folded.
+pub fn mean_ratio_smooth_released(
+    w: &mut Work,
+    sw: &Surface,
+    passes: usize,
+    floor: Option<f64>,
+    nodes_filter: impl Fn(usize) -> bool,
+    released: &[bool],
+    leave: f64,
+) -> MoveStats {
+    let mut st = MoveStats::default();
+    let n = w.mesh.nodes.len();
+    let mut active: Vec<bool> = (0..n).map(|v| !matches!(w.role[v], Role::Corner(_)) && nodes_filter(v)).collect();
+    for _ in 0..passes {
+        st.passes += 1;
+        let mut next = vec![false; n];
+        let mut moved = 0usize;
+        for v in 0..n {
+            if !active[v] {
+                continue;
+            }
+            let role = w.role[v];
+            let l = mean_edge(w, v);
+            if !(l > 0.0) {
+                continue;
+            }
+            let (smin, smean) = rel_dets(w, v as u32);
+            let delta = if smin < 1e-3 * smean { 0.05 * smean } else { 1e-4 * smean };
+            let x = w.mesh.nodes[v];
+            let q_before = local_eval(w, v as u32, x);
+            let valid_before = q_before.1 == 0;
+            let (e0, mut g) = node_energy(w, v as u32, x, delta);
+            if !e0.is_finite() {
+                continue;
+            }
+            let free3d = released.get(v).copied().unwrap_or(false) && matches!(role, Role::Free | Role::Curve(_));
+            if let (Role::Free, false) = (role, free3d) {
+                let t = w.attach[v];
+                let nrm = if t != u32::MAX { sw.normal(t) } else { sw.normal(sw.closest(x).1) };
+                g = sub(g, scale(nrm, dot(g, nrm)));
+            }
+            let gl = norm(g);
+            if !(gl > 0.0) {
+                continue;
+            }
+            let mut step = 0.2 * l / gl;
+            for _ in 0..10 {
+                st.moves_tried += 1;
+                let (y, t) = if free3d {
+                    let y = add(x, scale(g, -step));
+                    let (q, t, d) = sw.closest(y);
+                    (if d > leave { add(q, scale(sub(y, q), leave / d)) } else { y }, t)
+                } else {
+                    slide(sw, role, x, w.attach[v], scale(g, -step))
+                };
+                let (e1, _) = node_energy(w, v as u32, y, delta);
+                let ok = e1 < e0 - 1e-12 * e0 && {
+                    let q = local_eval(w, v as u32, y);
+                    (!valid_before || q.1 == 0) && floor.is_none_or(|f| q.0 >= q_before.0.min(f))
+                };
+                if ok {
+                    w.mesh.nodes[v] = y;
+                    w.attach[v] = t;
+                    st.moves_accepted += 1;
+                    if norm(sub(y, x)) > 1e-3 * l {
+                        moved += 1;
+                        next[v] = true;
+                        for &u in w.nbr.of(v) {
+                            next[u as usize] = true;
+                        }
+                    }
+                    break;
+                }
+                step *= 0.5;
+            }
+        }
+        for v in 0..n {
+            active[v] = next[v] && !matches!(w.role[v], Role::Corner(_)) && nodes_filter(v);
+        }
+        if moved == 0 {
+            break;
+        }
+    }
+    st
+}

@@ -1,0 +1,737 @@
+//! The hex stage end to end: accepted polycube + input surface -> mapped mesh at the
+//! level the stopping rule picks -> pillowing -> smoothing -> optimisation, with a
+//! before / after report for every step, in the user's coordinates.
+
+use super::distance::{hausdorff, Hausdorff};
+use super::frame::Affine;
+use super::grid::{lattice_hex, prolong, LatticeHex};
+use super::map::{self, Correspondence, FeatureMatch, Role};
+use super::optimize::{self, MoveStats, Work};
+use super::pillow::{pillow, PillowReport};
+use super::quality::{element_qualities, histogram, summarize, QualitySummary};
+use super::surface::{detect_features, prune_features, Surface};
+use super::topology::{self, mesh_volume};
+use super::HexMesh;
+use crate::context::Context;
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::geometry::vec3::*;
+use crate::geometry::{Aabb, Alignment};
+use crate::mesh::TriMesh;
+use crate::polycube::assembly::occupied_cell_box;
+use crate::polycube::dataset::context_frame;
+use crate::polycube::tensor::BoxFrame;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// What the hex stage needs from the pipeline.
+#[derive(Debug, Clone)]
+pub struct HexInput {
+    /// The input surface in the context's normalised frame (its aligned bounding box
+    /// scaled per axis onto the box of the occupied cells, longest edge 2, centred).
+    pub surface: TriMesh,
+    /// The accepted polycube.
+    pub context: Context,
+    /// Diffusion correspondence: (point on the polycube surface, point on the input
+    /// surface), both in the normalised frame. May be empty; used as a seed only.
+    pub correspondence: Vec<([f64; 3], [f64; 3])>,
+    /// Normalised frame -> user coordinates.
+    pub to_user: Affine,
+}
+
+impl HexInput {
+    /// The mapping DESIGN.md "Inference" fixes: the PCA-aligned input's bounding box
+    /// scaled per axis onto the normalised box of the context's occupied cells.
+    /// Returns the input and the affine map aligned frame -> normalised frame.
+    pub fn from_alignment(al: &Alignment, context: Context) -> Result<(HexInput, Affine)> {
+        let frame = context_frame(&context)
+            .ok_or_else(|| Error::InvalidContext("the context has no occupied cell".into()))?;
+        let (lo, hi) = occupied_cell_box(&context.labels).expect("occupied");
+        let blo = frame.to_normalised(lo.map(|v| v as f64));
+        let bhi = frame.to_normalised(hi.map(|v| v as f64));
+        let bb = Aabb::of_points(&al.mesh.vertices);
+        let size = bb.size();
+        if size.iter().any(|s| !(*s > 0.0)) {
+            return Err(Error::InvalidMesh(format!("the aligned input is flat (bounding box {size:?})")));
+        }
+        let s: [f64; 3] = std::array::from_fn(|a| (bhi[a] - blo[a]) / size[a]);
+        let t: [f64; 3] = std::array::from_fn(|a| blo[a] - s[a] * bb.min[a]);
+        let a_to_n = Affine::diagonal(s, t);
+        let n_to_a = a_to_n.inverse().expect("positive scales");
+        let a_to_u = Affine::from_transform(&al.transform.inverse());
+        let surface = TriMesh { vertices: al.mesh.vertices.iter().map(|&p| a_to_n.apply(p)).collect(), triangles: al.mesh.triangles.clone() };
+        Ok((HexInput { surface, context, correspondence: Vec::new(), to_user: a_to_u.after(&n_to_a) }, a_to_n))
+    }
+
+    /// PCA-align a user mesh (geometry::align) and map it as [`HexInput::from_alignment`] does.
+    pub fn from_user_mesh(mesh: &TriMesh, context: Context) -> Result<HexInput> {
+        let al = crate::geometry::align(mesh)?;
+        Ok(Self::from_alignment(&al, context)?.0)
+    }
+}
+
+/// Options of the hex stage (defaults in [`HexOptions::default`], docs/hex.md).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HexOptions {
+    /// Fix the subdivision level instead of choosing it by the stopping rule.
+    pub level: Option<u32>,
+    /// Smallest level the stopping rule may choose (default 2).
+    pub min_level: u32,
+    /// Largest level (default 4).
+    pub max_level: u32,
+    /// Stopping rule threshold: largest distance between a mapped midpoint and its
+    /// linear interpolation, relative to the input's bounding-box diagonal (default 0.005).
+    pub threshold: f64,
+    /// The stopping rule also stops when the measure of a level is above this fraction
+    /// of the previous level's (refining no longer helps; default 0.75).
+    pub stall_ratio: f64,
+    /// The level is capped so that the mesh has at most this many elements before pillowing (default 200 000).
+    pub max_elements: usize,
+    /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
+    pub feature_angle: f64,
+    /// Feature curves shorter than this fraction of the bounding-box diagonal are
+    /// ignored (default 0.03).
+    pub min_feature_length: f64,
+    /// Feature curves whose median dihedral angle (degrees) is below this are ignored
+    /// (default 60: creases of CAD parts, not facets of a coarse smooth surface).
+    pub feature_median_angle: f64,
+    /// Turning angle (degrees) that makes a feature-curve vertex a corner (default 45).
+    pub corner_angle: f64,
+    /// Relaxation iterations of the surface map on level 0 (later levels use a third).
+    pub surface_relax_iterations: usize,
+    /// Use the diffusion correspondence as the seed of the surface map (default true).
+    pub use_correspondence: bool,
+    /// Without a correspondence, fit the polycube's sub-voxel planes to the input
+    /// before mapping (default true).
+    pub fit_planes: bool,
+    pub pillow: bool,
+    /// Passes of mean-ratio smoothing (untangling) over all nodes (default 20).
+    pub smooth_iterations: usize,
+    /// Optimisation visits the nodes of elements below this scaled Jacobian.
+    pub optimise_target: f64,
+    pub optimise_passes: usize,
+    /// Where elements stay inverted after optimisation, the surface nodes around them
+    /// may leave the input by this fraction of the bounding-box diagonal (default 0.002).
+    pub release_distance: f64,
+    /// Extra random surface samples for the Hausdorff distance.
+    pub hausdorff_samples: usize,
+    /// Return the mapped mesh when the quality steps end below its minimum scaled
+    /// Jacobian (default true; false only to inspect the quality steps).
+    pub keep_better_mapped: bool,
+}
+
+impl Default for HexOptions {
+    fn default() -> Self {
+        HexOptions {
+            level: None,
+            min_level: 2,
+            max_level: 4,
+            threshold: 0.005,
+            max_elements: 200_000,
+            stall_ratio: 0.75,
+            feature_angle: 40.0,
+            min_feature_length: 0.03,
+            feature_median_angle: 60.0,
+            corner_angle: 45.0,
+            surface_relax_iterations: 30,
+            use_correspondence: true,
+            fit_planes: true,
+            pillow: true,
+            smooth_iterations: 20,
+            optimise_target: 0.8,
+            optimise_passes: 30,
+            release_distance: 0.002,
+            hausdorff_samples: 20_000,
+            keep_better_mapped: true,
+        }
+    }
+}
+
+/// One quality step: what it started from and what it produced.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StageReport {
+    pub stage: String,
+    pub before: QualitySummary,
+    pub after: QualitySummary,
+    pub nodes: usize,
+    pub elements: usize,
+    pub seconds: f64,
+    pub details: serde_json::Value,
+}
+
+/// One level of the mapping and the stopping rule's measurement on it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LevelReport {
+    pub level: u32,
+    pub nodes: usize,
+    pub elements: usize,
+    /// The stopping rule's measure: the largest distance between a boundary midpoint
+    /// linearly interpolated from this level and the input surface on which the next
+    /// level maps it, relative to the bounding-box diagonal (None when the next level
+    /// was not computed).
+    pub deviation: Option<f64>,
+    /// Boundary quads whose normal opposes the input's, and inverted elements, of
+    /// this level's map.
+    pub flipped_quads: usize,
+    pub inverted: usize,
+    pub seconds: f64,
+}
+
+/// How the surface map was set up.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SurfaceMapReport {
+    pub feature_curves: usize,
+    pub feature_corners: usize,
+    pub matched_corners: usize,
+    pub matched_chains: usize,
+    pub correspondence_pairs: usize,
+    /// Sub-voxel planes moved towards the input before mapping, and the largest move (normalised units).
+    pub planes_fitted: usize,
+    pub max_plane_shift: f64,
+    /// Boundary quads of the mapped mesh whose normal opposes the surface normal.
+    pub flipped_quads: usize,
+}
+
+/// The result of the hex stage.
+#[derive(Debug, Clone, Serialize)]
+pub struct HexResult {
+    /// The all-hex mesh in user coordinates (VTK_HEXAHEDRON order, positively oriented).
+    #[serde(skip)]
+    pub mesh: HexMesh,
+    /// The mapped mesh (before pillowing, smoothing and optimisation), user coordinates.
+    #[serde(skip)]
+    pub mapped: HexMesh,
+    pub level: u32,
+    #[serde(skip)]
+    pub scaled_jacobian: Vec<f64>,
+    pub quality: QualitySummary,
+    /// Counts of scaled Jacobians in 20 equal bins of [-1, 1].
+    pub histogram: Vec<usize>,
+    pub hausdorff: Hausdorff,
+    pub hausdorff_relative: f64,
+    pub volume: f64,
+    pub input_volume: f64,
+    pub levels: Vec<LevelReport>,
+    pub surface_map: SurfaceMapReport,
+    pub stages: Vec<StageReport>,
+    /// Which mesh was returned: "optimised" or "mapped" (when the quality steps did not
+    /// beat the mapped mesh's minimum scaled Jacobian).
+    pub returned: String,
+    pub seconds_total: f64,
+}
+
+fn summary(m: &HexMesh) -> QualitySummary {
+    summarize(&element_qualities(m))
+}
+
+fn signed_volume(t: &TriMesh) -> f64 {
+    t.triangles
+        .iter()
+        .map(|tr| {
+            let [a, b, c] = tr.map(|i| t.vertices[i as usize]);
+            dot(a, cross(b, c)) / 6.0
+        })
+        .sum()
+}
+
+/// Spread the boundary nodes on the surface (plain tangential Laplacian), take the
+/// harmonic interior when it is better than the current one, and fit again.
+fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &HexOptions, fit_stats: &mut Vec<optimize::FitStats>) {
+    let before = work.mesh.nodes.clone();
+    let before_attach = work.attach.clone();
+    let q0 = summary(&work.mesh);
+    map::relax_boundary(sw, &work.role, &work.curve_nb, &work.bgraph, &mut work.mesh.nodes, &mut work.attach, opts.surface_relax_iterations * 2, 0.5);
+    let mut harm = work.mesh.nodes.clone();
+    map::harmonic_interior(&work.nbr, &work.role, &mut harm, 1e-9, 5000);
+    let q_keep = summary(&work.mesh);
+    let keep = std::mem::replace(&mut work.mesh.nodes, harm);
+    let q_harm = summary(&work.mesh);
+    if (q_keep.inverted, -q_keep.min) < (q_harm.inverted, -q_harm.min) {
+        work.mesh.nodes = keep;
+    }
+    let f = optimize::fit_to_surface(work, sw, bquads, opts.surface_relax_iterations, 0.2);
+    fit_stats.push(f);
+    let q1 = summary(&work.mesh);
+    if (q1.inverted, -q1.min) > (q0.inverted, -q0.min) {
+        work.mesh.nodes = before;
+        work.attach = before_attach;
+    }
+}
+
+/// Target boxes of the elements of a lattice mesh: their start shape (the warped
+/// lattice) in the working frame, as edge lengths along the element axes.
+fn element_targets(h: &LatticeHex, warp: &map::Warp, to_w: &Affine) -> Vec<[f64; 3]> {
+    let col: [f64; 3] = std::array::from_fn(|a| (0..3).map(|i| to_w.m[i][a] * to_w.m[i][a]).sum::<f64>().sqrt());
+    h.elem_lattice
+        .iter()
+        .map(|&c| {
+            let ext = warp.element_extent(c, h.subdiv);
+            std::array::from_fn(|a| (ext[a] * col[a]).max(1e-12))
+        })
+        .collect()
+}
+
+/// Boundary quads whose normal opposes the normal of the input at their centre.
+fn flipped_quads(sw: &Surface, pos: &[[f64; 3]], quads: &[[u32; 4]]) -> usize {
+    quads
+        .par_iter()
+        .filter(|q| {
+            let p = q.map(|i| pos[i as usize]);
+            let nq = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+            let c = scale(p.iter().fold([0.0; 3], |a, x| add(a, *x)), 0.25);
+            let (_, t, _) = sw.closest(c);
+            dot(nq, sw.normal(t)) < 0.0
+        })
+        .count()
+}
+
+struct Level {
+    h: LatticeHex,
+    pos: Vec<[f64; 3]>,
+    attach: Vec<u32>,
+    role: Vec<Role>,
+    curve_nb: Vec<Vec<u32>>,
+    bquads: Vec<[u32; 4]>,
+}
+
+/// Build the all-hex mesh of `input` (see the module docs and docs/hex.md).
+pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Progress) -> Result<HexResult> {
+    let t_all = Instant::now();
+    // ---- checks ----
+    let validity = input.context.validity();
+    if !validity.valid {
+        return Err(Error::InvalidContext(format!(
+            "the polycube is not a valid solid: {}",
+            validity.reason.unwrap_or_default()
+        )));
+    }
+    if input.surface.triangles.is_empty() {
+        return Err(Error::InvalidArgument("the input surface has no triangles".into()));
+    }
+    if input.surface.vertices.iter().flatten().any(|v| !v.is_finite()) || !input.to_user.is_finite() {
+        return Err(Error::InvalidArgument("non-finite coordinate in the hex stage input".into()));
+    }
+    if input.surface.triangles.iter().flatten().any(|&i| i as usize >= input.surface.vertices.len()) {
+        return Err(Error::InvalidArgument("a triangle refers to a vertex that does not exist".into()));
+    }
+    if opts.max_level > 6 || opts.level.is_some_and(|l| l > 6) {
+        return Err(Error::InvalidArgument("subdivision levels above 6 are not supported".into()));
+    }
+    if !(opts.threshold > 0.0) {
+        return Err(Error::InvalidArgument(format!("threshold must be positive, got {}", opts.threshold)));
+    }
+    if input.to_user.inverse().is_none() {
+        return Err(Error::InvalidArgument("the map to user coordinates is singular".into()));
+    }
+    check_progress(progress, 0.0, "hex: setup")?;
+
+    // ---- frames ----
+    let frame: BoxFrame = context_frame(&input.context).expect("valid context has cells");
+    let grid = input.context.assemble();
+    let mut mesh_n = input.surface.clone();
+    if signed_volume(&mesh_n) < 0.0 {
+        for t in mesh_n.triangles.iter_mut() {
+            t.swap(1, 2);
+        }
+    }
+    let user_pts: Vec<[f64; 3]> = mesh_n.vertices.iter().map(|&p| input.to_user.apply(p)).collect();
+    let ubox = Aabb::of_points(&user_pts);
+    let longest = ubox.size().iter().copied().fold(0.0, f64::max);
+    if !(longest > 0.0) {
+        return Err(Error::InvalidArgument("the input surface has no extent".into()));
+    }
+    let sw_scale = 2.0 / longest;
+    // W is U centred and scaled, and mirrored in x when the map to U reverses
+    // orientation, so that the lattice's positive elements stay positive in W.
+    let mirror = input.to_user.det() < 0.0;
+    let sx = if mirror { -sw_scale } else { sw_scale };
+    let c = ubox.centre();
+    let u_to_w = Affine::diagonal([sx, sw_scale, sw_scale], [-sx * c[0], -sw_scale * c[1], -sw_scale * c[2]]);
+    let to_w = u_to_w.after(&input.to_user);
+    let w_to_u = u_to_w.inverse().expect("similarity");
+    let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
+    let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
+    let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
+    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0, opts.feature_median_angle);
+    let sn = Surface::new(mesh_n, features.clone());
+    let sw = Surface::new(mesh_w, features);
+    let diag_w = sw.bbox.diagonal();
+    let corr = if opts.use_correspondence { Correspondence::new(&input.correspondence) } else { None };
+
+    // ---- levels ----
+    // start embedding of the polycube: its sub-voxel planes fitted to the input
+    // (or the uniform lattice when the correspondence seeds the map)
+    let (warp, warp_report) = if opts.fit_planes && corr.is_none() {
+        let h0 = lattice_hex(&grid, 0);
+        let cells = occupied_cell_box(&input.context.labels).expect("occupied");
+        map::fit_warp(&h0, &frame, cells, &sn)
+    } else {
+        (map::Warp::uniform(&frame), map::WarpReport::default())
+    };
+    // features are matched on level 1, where every polycube edge has an inner node
+    let h1 = lattice_hex(&grid, 1);
+    let pos_n1: Vec<[f64; 3]> = h1.mesh.nodes.iter().map(|&g| warp.apply(g)).collect();
+    let radius = 0.5 * frame.scale / 3.0;
+    let fm: FeatureMatch = map::match_features(&h1, &pos_n1, &sn, radius);
+    drop(h1);
+    let mut smap = SurfaceMapReport {
+        feature_curves: sw.features.curves.len(),
+        feature_corners: sw.features.corners.len(),
+        matched_corners: fm.corners.len(),
+        matched_chains: fm.chains.len(),
+        correspondence_pairs: corr.as_ref().map(|_| input.correspondence.len()).unwrap_or(0),
+        planes_fitted: warp_report.planes_fitted,
+        max_plane_shift: warp_report.max_shift,
+        flipped_quads: 0,
+    };
+    let max_level = opts.level.unwrap_or(opts.max_level);
+    let min_level = opts.level.unwrap_or(opts.min_level.min(max_level));
+    let mut levels: Vec<LevelReport> = Vec::new();
+    let mut fit_stats: Vec<optimize::FitStats> = Vec::new();
+    let mut prev: Option<Level> = None;
+    let mut chosen: Option<Level> = None;
+    for l in 0..=max_level {
+        let t0 = Instant::now();
+        check_progress(progress, 0.05 + 0.45 * l as f64 / (max_level + 1) as f64, &format!("hex: mapping level {l}"))?;
+        let h = lattice_hex(&grid, l);
+        let (role, curve_nb) = map::roles(&h, &fm);
+        let masks = map::normal_masks(&h);
+        let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
+        let bgraph = map::boundary_graph(h.mesh.nodes.len(), &bquads);
+        let n = h.mesh.nodes.len();
+        let mut work = Work {
+            mesh: HexMesh { nodes: Vec::new(), elements: h.mesh.elements.clone() },
+            role: role.clone(),
+            attach: vec![u32::MAX; n],
+            curve_nb: curve_nb.clone(),
+            bgraph,
+            nbr: Default::default(),
+            n2e: Default::default(),
+            target: element_targets(&h, &warp, &to_w),
+        };
+        let e = topology::edges(&h.mesh);
+        work.nbr = topology::node_neighbours(n, &e);
+        work.n2e = topology::node_elements(&h.mesh);
+        let interp = match &prev {
+            None => {
+                // the polycube itself (plus the correspondence seed) in the working frame
+                work.mesh.nodes = h
+                    .mesh
+                    .nodes
+                    .iter()
+                    .map(|&g| match corr.as_ref() {
+                        Some(c) => {
+                            let u = frame.to_normalised(g);
+                            to_w.apply(add(u, c.displacement(u, 8)))
+                        }
+                        None => to_w.apply(warp.apply(g)),
+                    })
+                    .collect();
+                let _ = &masks;
+                let f = optimize::fit_to_surface(&mut work, &sw, &bquads, opts.surface_relax_iterations, 0.2);
+                fit_stats.push(f);
+                relax_and_refit(&mut work, &sw, &bquads, opts, &mut fit_stats);
+                None
+            }
+            Some(pv) => {
+                let interp = prolong(&pv.h, &pv.pos, &h);
+                let nrm = map::quad_normals(n, &bquads, &interp);
+                let mut pos = interp.clone();
+                for v in 0..n {
+                    match role[v] {
+                        Role::Interior => {}
+                        Role::Corner(c) => pos[v] = sw.mesh.vertices[c as usize],
+                        Role::Curve(c) => pos[v] = sw.closest_on_curve(c as usize, interp[v]).point,
+                        Role::Free => {
+                            let (q, t, _) = sw.closest_facing(interp[v], nrm[v], 0.0);
+                            pos[v] = q;
+                            work.attach[v] = t;
+                        }
+                    }
+                }
+                // interior: the prolonged positions or the harmonic map, whichever is better
+                let mut harm = pos.clone();
+                map::harmonic_interior(&work.nbr, &role, &mut harm, 1e-9, 5000);
+                work.mesh.nodes = pos;
+                let q_pro = summary(&work.mesh);
+                let keep = std::mem::replace(&mut work.mesh.nodes, harm);
+                let q_harm = summary(&work.mesh);
+                if (q_pro.inverted, -q_pro.min) < (q_harm.inverted, -q_harm.min) {
+                    work.mesh.nodes = keep;
+                }
+                if l <= 1 {
+                    // the coarse levels define the surface map: fit and spread
+                    let f = optimize::fit_to_surface(&mut work, &sw, &bquads, opts.surface_relax_iterations / 2, 0.2);
+                    fit_stats.push(f);
+                    relax_and_refit(&mut work, &sw, &bquads, opts, &mut fit_stats);
+                } else {
+                    // finer levels inherit it: only the interior is evened out
+                    optimize::untangle(&mut work, &sw, 3, |v| role[v] == Role::Interior);
+                }
+                Some(interp)
+            }
+        };
+        let pos = work.mesh.nodes;
+        let attach = work.attach;
+        let cur = Level { h, pos, attach, role, curve_nb, bquads };
+        let flipped = flipped_quads(&sw, &cur.pos, &cur.bquads);
+        let inverted = summary(&HexMesh { nodes: cur.pos.clone(), elements: cur.h.mesh.elements.clone() }).inverted;
+        let rep = LevelReport {
+            level: l,
+            nodes: cur.pos.len(),
+            elements: cur.h.mesh.elements.len(),
+            deviation: None,
+            flipped_quads: flipped,
+            inverted,
+            seconds: t0.elapsed().as_secs_f64(),
+        };
+        // the stopping rule for the previous level
+        if let (Some(pv), Some(interp)) = (prev.as_ref(), interp.as_ref()) {
+            // chord height: how far the linearly interpolated boundary midpoints are from
+            // the surface their mapped counterparts lie on
+            let dev: f64 = cur
+                .h
+                .node_lattice
+                .par_iter()
+                .enumerate()
+                .filter(|(v, lat)| cur.role[*v].on_boundary() && lat.iter().any(|c| c % 2 == 1))
+                .map(|(v, _)| sw.closest(interp[v]).2)
+                .reduce(|| 0.0, f64::max);
+            let dev = dev / diag_w;
+            let k = levels.len() - 1;
+            levels[k].deviation = Some(dev);
+            // a measure that no longer shrinks means refining does not resolve what is
+            // left (sharp features no polycube edge follows): stop there as well
+            let stalled = k >= 1 && levels[k - 1].deviation.is_some_and(|d0| dev > opts.stall_ratio * d0);
+            // refining must not fold the map: a finer level whose share of flipped
+            // boundary quads is above twice this one's plus 0.2 % is not taken
+            let frac = |f: usize, q: usize| f as f64 / q.max(1) as f64;
+            let folds = frac(rep.flipped_quads, cur.bquads.len()) > 2.0 * frac(levels[k].flipped_quads, pv.bquads.len()) + 0.002;
+            if opts.level.is_none() && pv.h.level >= min_level && (dev <= opts.threshold || stalled || folds) {
+                levels.push(rep);
+                chosen = prev.take();
+                break;
+            }
+        }
+        levels.push(rep);
+        let next_elements = cur.h.mesh.elements.len() * 8;
+        let last = l == max_level || (opts.level.is_none() && l >= min_level && next_elements > opts.max_elements);
+        if last {
+            chosen = Some(cur);
+            break;
+        }
+        prev = Some(cur);
+    }
+    let lv = chosen.expect("a level is chosen");
+    let level = lv.h.level;
+
+    // ---- mapped mesh ----
+    let mut work = Work {
+        mesh: HexMesh { nodes: lv.pos.clone(), elements: lv.h.mesh.elements.clone() },
+        role: lv.role.clone(),
+        attach: lv.attach.clone(),
+        curve_nb: lv.curve_nb.clone(),
+        bgraph: Default::default(),
+        nbr: Default::default(),
+        n2e: Default::default(),
+        target: element_targets(&lv.h, &warp, &to_w),
+    };
+    work.rebuild();
+    smap.flipped_quads = flipped_quads(&sw, &work.mesh.nodes, &lv.bquads);
+    let mapped = work.mesh.clone();
+    let q_mapped = summary(&mapped);
+    let mut stages = vec![StageReport {
+        stage: "mapping".into(),
+        before: QualitySummary::default(),
+        after: q_mapped,
+        nodes: mapped.nodes.len(),
+        elements: mapped.elements.len(),
+        seconds: levels.iter().map(|l| l.seconds).sum(),
+        details: serde_json::json!({ "level": level, "flipped_boundary_quads": smap.flipped_quads, "fit": fit_stats }),
+    }];
+
+    // ---- pillowing ----
+    if opts.pillow {
+        check_progress(progress, 0.55, "hex: pillowing")?;
+        let t0 = Instant::now();
+        let before = q_mapped;
+        let rep: PillowReport = pillow(&mut work)?;
+        stages.push(StageReport {
+            stage: "pillowing".into(),
+            before,
+            after: summary(&work.mesh),
+            nodes: work.mesh.nodes.len(),
+            elements: work.mesh.elements.len(),
+            seconds: t0.elapsed().as_secs_f64(),
+            details: serde_json::to_value(&rep).unwrap_or_default(),
+        });
+    }
+
+    // ---- smoothing: mean-ratio energy of the corners (untangles, then evens out) ----
+    check_progress(progress, 0.6, "hex: smoothing")?;
+    let t0 = Instant::now();
+    let before = summary(&work.mesh);
+    let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
+    stages.push(StageReport {
+        stage: "smoothing".into(),
+        before,
+        after: summary(&work.mesh),
+        nodes: work.mesh.nodes.len(),
+        elements: work.mesh.elements.len(),
+        seconds: t0.elapsed().as_secs_f64(),
+        details: serde_json::to_value(st).unwrap_or_default(),
+    });
+
+    // ---- optimisation ----
+    check_progress(progress, 0.65, "hex: optimisation")?;
+    let t0 = Instant::now();
+    let before = summary(&work.mesh);
+    let passes = opts.optimise_passes;
+    let mut cancelled = false;
+    let mut st = optimize::optimise(&mut work, &sw, opts.optimise_target, passes, |p| {
+        let ok = progress.report(0.65 + 0.2 * p as f64 / passes.max(1) as f64, "hex: optimisation");
+        if !ok {
+            cancelled = true;
+        }
+        !ok
+    });
+    if cancelled {
+        return Err(Error::Cancelled("hex: optimisation".into()));
+    }
+    // polish: the mean-ratio energy again, now never below the minimum reached
+    if passes > 0 {
+        check_progress(progress, 0.88, "hex: optimisation")?;
+        let floor = summary(&work.mesh).min;
+        let p = optimize::mean_ratio_smooth(&mut work, &sw, opts.smooth_iterations, Some(floor.max(0.0)), |_| true);
+        let p2 = optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
+        st.passes += p.passes + p2.passes;
+        st.moves_tried += p.moves_tried + p2.moves_tried;
+        st.moves_accepted += p.moves_accepted + p2.moves_accepted;
+    }
+    // where elements are still inverted, the boundary itself is folded: let the
+    // boundary nodes of the bad elements (and their ring) leave the input by a little
+    let mut released_nodes = 0usize;
+    if opts.release_distance > 0.0 && summary(&work.mesh).inverted > 0 {
+        let q = element_qualities(&work.mesh);
+        let mut rel = vec![false; work.mesh.nodes.len()];
+        for (e, el) in work.mesh.elements.iter().enumerate() {
+            if q[e] <= 0.05 || q[e] == super::quality::DEGENERATE {
+                for &v in el {
+                    rel[v as usize] = true;
+                    for &u in work.nbr.of(v as usize) {
+                        rel[u as usize] = true;
+                    }
+                }
+            }
+        }
+        for v in 0..rel.len() {
+            rel[v] &= work.role[v].on_boundary();
+        }
+        released_nodes = rel.iter().filter(|&&b| b).count();
+        let leave = opts.release_distance * diag_w;
+        let keep = (work.mesh.nodes.clone(), work.attach.clone());
+        let q0 = summary(&work.mesh);
+        optimize::mean_ratio_smooth_released(&mut work, &sw, opts.smooth_iterations, None, |_| true, &rel, leave);
+        optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
+        let q1 = summary(&work.mesh);
+        if (q1.inverted, -q1.min) > (q0.inverted, -q0.min) {
+            work.mesh.nodes = keep.0;
+            work.attach = keep.1;
+            released_nodes = 0;
+        }
+    }
+    let q_final = summary(&work.mesh);
+    stages.push(StageReport {
+        stage: "optimisation".into(),
+        before,
+        after: q_final,
+        nodes: work.mesh.nodes.len(),
+        elements: work.mesh.elements.len(),
+        seconds: t0.elapsed().as_secs_f64(),
+        details: serde_json::json!({ "moves": st, "released_boundary_nodes": released_nodes }),
+    });
+
+    // ---- never worse than the mapped mesh ----
+    let mut mapped_u = mapped.clone();
+    for p in mapped_u.nodes.iter_mut() {
+        *p = w_to_u.apply(*p);
+    }
+    if mirror {
+        for e in mapped_u.elements.iter_mut() {
+            *e = [e[4], e[5], e[6], e[7], e[0], e[1], e[2], e[3]];
+        }
+    }
+    let (mut out, returned) = if q_final.min >= q_mapped.min || !opts.keep_better_mapped { (work.mesh, "optimised") } else { (mapped, "mapped") };
+    check_progress(progress, 0.96, "hex: distances")?;
+    let haus_w = hausdorff(&out, &sw.mesh, opts.hausdorff_samples);
+    let s_inv = 1.0 / sw_scale;
+    let haus = Hausdorff {
+        hex_to_surface: haus_w.hex_to_surface * s_inv,
+        surface_to_hex: haus_w.surface_to_hex * s_inv,
+        distance: haus_w.distance * s_inv,
+        ..haus_w
+    };
+    for p in out.nodes.iter_mut() {
+        *p = w_to_u.apply(*p);
+    }
+    if mirror {
+        for e in out.elements.iter_mut() {
+            *e = [e[4], e[5], e[6], e[7], e[0], e[1], e[2], e[3]];
+        }
+    }
+    let input_volume = signed_volume(&TriMesh { vertices: sw.mesh.vertices.clone(), triangles: sw.mesh.triangles.clone() }) * s_inv.powi(3);
+    let volume = mesh_volume(&out);
+    let sj = element_qualities(&out);
+    let quality = summarize(&sj);
+    check_progress(progress, 1.0, "hex: done")?;
+    Ok(HexResult {
+        mesh: out,
+        mapped: mapped_u,
+        level,
+        histogram: histogram(&sj, 20),
+        scaled_jacobian: sj,
+        quality,
+        hausdorff: haus,
+        hausdorff_relative: haus.relative,
+        volume,
+        input_volume,
+        levels,
+        surface_map: smap,
+        stages,
+        returned: returned.into(),
+        seconds_total: t_all.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+        let v: Vec<[f64; 3]> = (0..8)
+            .map(|i| [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }])
+            .collect();
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let mut t = Vec::new();
+        for q in quads {
+            t.push([q[0], q[1], q[2]]);
+            t.push([q[0], q[2], q[3]]);
+        }
+        TriMesh { vertices: v, triangles: t }
+    }
+
+    #[test]
+    fn unit_box_maps_to_a_perfect_grid() {
+        let ctx = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+        let input = HexInput {
+            surface: box_mesh([-1.0; 3], [1.0; 3]),
+            context: ctx,
+            correspondence: vec![],
+            to_user: Affine::similarity(0.5, [0.5; 3]),
+        };
+        let opts = HexOptions { level: Some(1), pillow: true, ..Default::default() };
+        let r = build_hex_mesh(&input, &opts, &mut crate::error::NoProgress).unwrap();
+        assert!((r.stages[0].after.min - 1.0).abs() < 1e-12);
+        assert!(r.quality.min >= r.stages[0].after.min);
+    }
+}

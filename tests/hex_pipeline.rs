@@ -1,0 +1,205 @@
+//! Issue 6 tests of the hex stage: perfect grid from a unit box, never worse than the
+//! mapped mesh, THC and BHC inputs with the right volume, orientation, exports.
+
+use sddpm::context::Context;
+use sddpm::error::NoProgress;
+use sddpm::geometry::vec3::*;
+use sddpm::hex::quality::{element_qualities, summarize};
+use sddpm::hex::topology::{hex_volume, mesh_volume};
+use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
+use sddpm::mesh::{LoadOptions, TriMesh};
+use sddpm::polycube::dataset::context_frame;
+
+fn signed_volume(t: &TriMesh) -> f64 {
+    t.triangles
+        .iter()
+        .map(|tr| {
+            let [a, b, c] = tr.map(|i| t.vertices[i as usize]);
+            dot(a, cross(b, c)) / 6.0
+        })
+        .sum()
+}
+
+/// The polycube's own boundary in the normalised frame, every quad split k x k, then
+/// moved by `deform`.
+fn polycube_surface(ctx: &Context, k: usize, deform: impl Fn([f64; 3]) -> [f64; 3]) -> TriMesh {
+    let q = sddpm::polycube::boundary(&ctx.assemble());
+    let frame = context_frame(ctx).unwrap();
+    let mut verts: Vec<[f64; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut id = |p: [f64; 3], verts: &mut Vec<[f64; 3]>| -> u32 {
+        let key = p.map(|v| (v * 1e9).round() as i64);
+        *index.entry(key).or_insert_with(|| {
+            verts.push(p);
+            verts.len() as u32 - 1
+        })
+    };
+    let mut tris = Vec::new();
+    for quad in &q.quads {
+        let p = quad.map(|i| q.vertices[i as usize]);
+        let at = |u: f64, v: f64| -> [f64; 3] {
+            let a = add(scale(p[0], 1.0 - u), scale(p[1], u));
+            let b = add(scale(p[3], 1.0 - u), scale(p[2], u));
+            add(scale(a, 1.0 - v), scale(b, v))
+        };
+        for j in 0..k {
+            for i in 0..k {
+                let (u0, u1, v0, v1) = (i as f64 / k as f64, (i + 1) as f64 / k as f64, j as f64 / k as f64, (j + 1) as f64 / k as f64);
+                let c = [at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)].map(|g| id(frame.to_normalised(g), &mut verts));
+                tris.push([c[0], c[1], c[2]]);
+                tris.push([c[0], c[2], c[3]]);
+            }
+        }
+    }
+    TriMesh { vertices: verts.into_iter().map(deform).collect(), triangles: tris }
+}
+
+fn run(input: &HexInput, opts: &HexOptions) -> HexResult {
+    build_hex_mesh(input, opts, &mut NoProgress).expect("hex mesh")
+}
+
+fn assert_never_worse(r: &HexResult) {
+    let mapped = r.stages[0].after.min;
+    assert!(r.quality.min >= mapped - 1e-12, "returned min {} below mapped {}", r.quality.min, mapped);
+    // what is returned is what is reported
+    let q = summarize(&element_qualities(&r.mesh));
+    assert_eq!(q.elements, r.mesh.elements.len());
+    assert!((q.min - r.quality.min).abs() < 1e-12);
+}
+
+#[test]
+fn unit_box_gives_a_perfect_grid() {
+    let ctx = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let surface = polycube_surface(&ctx, 1, |p| p);
+    // user frame: the unit box [0,1]^3
+    let input = HexInput { surface, context: ctx, correspondence: vec![], to_user: Affine::similarity(0.5, [0.5; 3]) };
+    for level in 0..=2 {
+        let r = run(&input, &HexOptions { level: Some(level), ..Default::default() });
+        let n = 3usize << level;
+        assert_eq!(r.mapped.elements.len(), n * n * n);
+        let q = summarize(&element_qualities(&r.mapped));
+        assert!((q.min - 1.0).abs() < 1e-12, "level {level}: mapped min {}", q.min);
+        assert_eq!(r.stages[0].stage, "mapping");
+        assert!((r.stages[0].after.min - 1.0).abs() < 1e-12);
+        // the mapped grid is the regular grid of the unit box
+        for p in &r.mapped.nodes {
+            for c in p {
+                let t = c * n as f64;
+                assert!((t - t.round()).abs() < 1e-9 && (-1e-12..=1.0 + 1e-12).contains(c), "{p:?}");
+            }
+        }
+        assert_never_worse(&r);
+        assert!(r.quality.min > 0.999);
+        assert!((mesh_volume(&r.mesh) - 1.0).abs() < 1e-9);
+        assert!(r.hausdorff_relative < 1e-9);
+    }
+}
+
+fn thc_context() -> Context {
+    Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()
+}
+
+#[test]
+fn synthetic_thc_and_bhc_are_valid_with_the_input_volume() {
+    // smooth bends of the primitives' own shapes, mapped to a user frame with a
+    // rotation and a non-uniform scale
+    let bend = |p: [f64; 3]| [p[0] + 0.12 * (1.3 * p[1]).sin(), p[1] + 0.08 * (p[0] * p[2]), p[2] * (1.0 + 0.1 * p[0])];
+    let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+    let to_user = Affine { m: [[3.0 * c, -3.0 * s, 0.0], [2.0 * s, 2.0 * c, 0.0], [0.0, 0.0, 1.5]], t: [10.0, -4.0, 2.0] };
+    for labels in ["THC+Z,0,0,0,0,0,0,0,0,0,0,0", "BHC+Z,0,0,0,0,0,0,0,0,0,0,0", "THC+X,cube,BHC-Y,0,0,0,0,0,0,0,0,0"] {
+        let ctx = Context::parse(labels).unwrap();
+        let surface = polycube_surface(&ctx, 6, bend);
+        let user = TriMesh { vertices: surface.vertices.iter().map(|&p| to_user.apply(p)).collect(), triangles: surface.triangles.clone() };
+        let vol = signed_volume(&user);
+        let input = HexInput { surface, context: ctx, correspondence: vec![], to_user };
+        let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+        assert_eq!(r.quality.inverted, 0, "{labels}");
+        assert!(r.quality.min > 0.3, "{labels}: min {}", r.quality.min);
+        assert!(((r.volume - vol) / vol).abs() < 0.01, "{labels}: volume {} vs {}", r.volume, vol);
+        assert!(r.hausdorff_relative < 0.01, "{labels}: hausdorff {}", r.hausdorff_relative);
+        assert_never_worse(&r);
+        for e in 0..r.mesh.elements.len() {
+            assert!(hex_volume(&r.mesh.element_corners(e)) > 0.0);
+        }
+    }
+}
+
+fn real(file: &str, labels: &str) -> (HexInput, f64) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    let mesh = TriMesh::load(dir.join(file), &LoadOptions::default()).unwrap();
+    let vol = signed_volume(&mesh);
+    (HexInput::from_user_mesh(&mesh, Context::parse(labels).unwrap()).unwrap(), vol)
+}
+
+#[test]
+fn real_thc_input_is_valid_with_the_input_volume() {
+    let (input, vol) = real("cgal_hole.off", "THC+Z,0,0,0,0,0,0,0,0,0,0,0");
+    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    assert_eq!(r.quality.inverted, 0);
+    assert!(r.quality.min >= 0.3, "min {}", r.quality.min);
+    assert!(((r.volume - vol) / vol).abs() < 0.01, "volume {} vs {}", r.volume, vol);
+    assert!(r.hausdorff_relative < 0.01);
+    assert_never_worse(&r);
+    let (input, vol) = real("cinolib_torus.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0");
+    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    assert_eq!(r.quality.inverted, 0);
+    assert!(((r.volume - vol) / vol).abs() < 0.015, "volume {} vs {}", r.volume, vol);
+    assert_never_worse(&r);
+}
+
+#[test]
+fn stopping_rule_picks_a_level_within_the_range() {
+    let ctx = thc_context();
+    let surface = polycube_surface(&ctx, 4, |p| [p[0], p[1], p[2] + 0.1 * (p[0] * 2.0).sin()]);
+    let input = HexInput { surface, context: ctx, correspondence: vec![], to_user: Affine::IDENTITY };
+    let opts = HexOptions { min_level: 1, max_level: 3, threshold: 0.004, ..Default::default() };
+    let r = run(&input, &opts);
+    assert!((1..=3).contains(&r.level));
+    let chosen = r.levels.iter().find(|l| l.level == r.level).unwrap();
+    if r.level < 3 {
+        // below the threshold, or stalled against the level before
+        let d = chosen.deviation.unwrap();
+        let before = r.levels.iter().find(|l| l.level + 1 == r.level).and_then(|l| l.deviation);
+        assert!(d <= 0.004 || before.is_some_and(|b| d > opts.stall_ratio * b), "{d}");
+    }
+    for l in r.levels.iter().filter(|l| l.level >= 1 && l.level < r.level) {
+        assert!(l.deviation.unwrap() > 0.004, "level {} passed the rule but a finer one was chosen", l.level);
+    }
+}
+
+#[test]
+fn bad_inputs_are_refused() {
+    let ctx = thc_context();
+    let surface = polycube_surface(&ctx, 1, |p| p);
+    let mut input = HexInput { surface, context: ctx, correspondence: vec![], to_user: Affine::IDENTITY };
+    input.to_user.m[2] = [0.0; 3];
+    assert!(build_hex_mesh(&input, &HexOptions::default(), &mut NoProgress).is_err());
+    input.to_user = Affine::IDENTITY;
+    input.surface.vertices[0][0] = f64::NAN;
+    assert!(build_hex_mesh(&input, &HexOptions::default(), &mut NoProgress).is_err());
+    let bad_ctx = Context::parse("cube,0,0,0,cube,0,0,0,0,0,0,0").unwrap(); // cells meet along an edge
+    let input = HexInput { surface: polycube_surface(&thc_context(), 1, |p| p), context: bad_ctx, correspondence: vec![], to_user: Affine::IDENTITY };
+    assert!(build_hex_mesh(&input, &HexOptions::default(), &mut NoProgress).is_err());
+    // cancel through the progress callback
+    let input = HexInput { surface: polycube_surface(&thc_context(), 1, |p| p), context: thc_context(), correspondence: vec![], to_user: Affine::IDENTITY };
+    let mut cancel = |_f: f64, stage: &str| !stage.contains("pillow");
+    let e = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut cancel).unwrap_err();
+    assert_eq!(e.status(), sddpm::Status::Cancelled);
+}
+
+#[test]
+fn correspondence_seed_is_used_and_harmless() {
+    // a correspondence that is the identity plus noise: the result stays valid
+    let ctx = thc_context();
+    let surface = polycube_surface(&ctx, 4, |p| scale(p, 1.0 + 0.05 * p[2]));
+    let mut corr = Vec::new();
+    for (i, p) in surface.vertices.iter().enumerate() {
+        let noise = 0.01 * ((i as f64 * 12.9898).sin());
+        corr.push((*p, [p[0] + noise, p[1] - noise, p[2]]));
+    }
+    let input = HexInput { surface, context: ctx, correspondence: corr, to_user: Affine::IDENTITY };
+    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    assert!(r.surface_map.correspondence_pairs > 0);
+    assert_eq!(r.quality.inverted, 0);
+    assert_never_worse(&r);
+}
