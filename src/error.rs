@@ -157,3 +157,18 @@ pub fn check_progress(p: &mut dyn Progress, fraction: f64, stage: &str) -> Resul
         Err(Error::Cancelled(stage.to_string()))
     }
 }
+
+/// Progress of a sub-stage mapped onto [lo, hi] of the caller's range; cancel requests
+/// pass through.
+pub struct SubProgress<'a> {
+    pub inner: &'a mut dyn Progress,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Progress for SubProgress<'_> {
+    fn report(&mut self, fraction: f64, stage: &str) -> bool {
+        let f = self.lo + (self.hi - self.lo) * fraction.clamp(0.0, 1.0);
+        self.inner.report(f, stage)
+    }
+}

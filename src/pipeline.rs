@@ -6,7 +6,7 @@ use crate::context::auto::{auto_failure, generate_auto, AutoOptions, AutoReport,
 use crate::context::generate::{generate_from_contexts, PolycubeOptions, PolycubeResult};
 use crate::context::{Constraints, Context};
 use crate::diffusion::Model;
-use crate::error::{Error, Progress, Result};
+use crate::error::{check_progress, Error, Progress, Result};
 use crate::mesh::TriMesh;
 use serde::{Deserialize, Serialize};
 
@@ -80,4 +80,180 @@ pub fn generate_polycube(
             Ok((r, Some(rep), e))
         }
     }
+}
+
+// ------------------------------------------------------------------ the whole job
+
+use crate::context::generate::Candidate;
+use crate::error::SubProgress;
+use crate::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
+use crate::spline::{build_spline, Spline, SplineOptions};
+use std::time::Instant;
+
+/// Options of [`run`]: one struct per stage, each with its documented defaults.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOptions {
+    pub polycube: PolycubeOptions,
+    pub auto: AutoOptions,
+    pub hex: HexOptions,
+    /// `None` stops after the hex mesh (the command line's `--no-spline`).
+    pub spline: Option<SplineOptions>,
+    /// How many verified candidates (best score first) are meshed; the one whose hex
+    /// mesh has the fewest inverted elements, then the highest minimum scaled Jacobian,
+    /// is kept (default 2: a second candidate costs one more hex build and often
+    /// rescues an orientation whose map folds).
+    pub hex_candidates: usize,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            polycube: PolycubeOptions::default(),
+            auto: AutoOptions::default(),
+            hex: HexOptions::default(),
+            spline: Some(SplineOptions::default()),
+            hex_candidates: 2,
+        }
+    }
+}
+
+/// One hex build of a verified candidate.
+#[derive(Debug, Clone, Serialize)]
+pub struct HexAttempt {
+    pub candidate: usize,
+    pub context: String,
+    pub min_scaled_jacobian: f64,
+    pub inverted: usize,
+    pub hausdorff_relative: f64,
+    pub seconds: f64,
+}
+
+/// Everything [`run`] produced.
+pub struct RunResult {
+    pub polycube: PolycubeResult,
+    pub auto: Option<AutoReport>,
+    /// Index (into `polycube.candidates`) of the candidate that was meshed and kept.
+    pub candidate: usize,
+    pub hex_attempts: Vec<HexAttempt>,
+    pub hex: HexResult,
+    /// The spline fitted to the input surface (None with `spline: None`).
+    pub spline: Option<Spline>,
+    /// Wall-clock seconds per stage ("polycube", "hex", "spline").
+    pub seconds: Vec<(String, f64)>,
+}
+
+/// The affine map equal to `f` (which must be affine), read off at four points.
+fn affine_of(f: impl Fn([f64; 3]) -> [f64; 3]) -> Affine {
+    let t = f([0.0; 3]);
+    let cols: [[f64; 3]; 3] = std::array::from_fn(|a| {
+        let mut e = [0.0; 3];
+        e[a] = 1.0;
+        let p = f(e);
+        std::array::from_fn(|i| p[i] - t[i])
+    });
+    Affine { m: std::array::from_fn(|i| std::array::from_fn(|j| cols[j][i])), t }
+}
+
+/// The hex stage's input for a diffused candidate: the user's surface in the
+/// candidate's normalised frame (alignment, then the candidate's box map, rotation
+/// included), the diffusion correspondence and the way back to user coordinates.
+pub fn hex_input(result: &PolycubeResult, cand: &Candidate, mesh: &TriMesh) -> Result<HexInput> {
+    let inp = cand
+        .input
+        .as_ref()
+        .ok_or_else(|| Error::InvalidArgument(format!("candidate {} was never diffused", cand.context)))?;
+    let tr = &result.alignment.transform;
+    let map = &inp.map;
+    let to_norm = affine_of(|p| map.forward(tr.apply(p)));
+    let to_user = to_norm
+        .inverse()
+        .ok_or_else(|| Error::Internal(format!("the frame map of {} is singular", cand.context)))?;
+    let surface = TriMesh { vertices: mesh.vertices.iter().map(|&p| to_norm.apply(p)).collect(), triangles: mesh.triangles.clone() };
+    Ok(HexInput { surface, context: cand.context.clone(), correspondence: cand.correspondence(), to_user })
+}
+
+/// The main job: polycube (any request), hex mesh of the best verified candidate(s),
+/// spline fitted to the input. Progress: polycube 0-50 %, hex 50-85 %, spline 85-100 %.
+pub fn run(
+    model: &Model,
+    mesh: &TriMesh,
+    genus: i64,
+    request: &ContextRequest,
+    opts: &RunOptions,
+    progress: &mut dyn Progress,
+) -> Result<RunResult> {
+    let mut seconds = Vec::new();
+    let t0 = Instant::now();
+    let (pr, auto, err) = {
+        let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
+        generate_polycube(model, mesh, genus, request, &opts.polycube, &opts.auto, &mut sub)?
+    };
+    seconds.push(("polycube".to_string(), t0.elapsed().as_secs_f64()));
+    if let Some(e) = err {
+        return Err(e);
+    }
+    let mut order: Vec<usize> = (0..pr.candidates.len()).filter(|&i| pr.candidates[i].stage == crate::context::generate::Stage::Verified).collect();
+    order.sort_by(|&a, &b| {
+        let sa = pr.candidates[a].score.unwrap_or(f64::INFINITY);
+        let sb = pr.candidates[b].score.unwrap_or(f64::INFINITY);
+        sa.total_cmp(&sb)
+    });
+    if let Some(c) = pr.chosen {
+        order.retain(|&i| i != c);
+        order.insert(0, c);
+    }
+    order.truncate(opts.hex_candidates.max(1));
+    let t1 = Instant::now();
+    let mut best: Option<(usize, HexResult)> = None;
+    let mut attempts = Vec::new();
+    let n = order.len();
+    let mut last_err = None;
+    for (k, &ci) in order.iter().enumerate() {
+        let cand = &pr.candidates[ci];
+        let input = hex_input(&pr, cand, mesh)?;
+        let th = Instant::now();
+        let mut sub = SubProgress { inner: progress, lo: 0.5 + 0.35 * k as f64 / n as f64, hi: 0.5 + 0.35 * (k + 1) as f64 / n as f64 };
+        let r = match build_hex_mesh(&input, &opts.hex, &mut sub) {
+            Ok(r) => r,
+            Err(e @ Error::Cancelled(_)) => return Err(e),
+            Err(e) => {
+                last_err = Some(e);
+                continue;
+            }
+        };
+        attempts.push(HexAttempt {
+            candidate: ci,
+            context: cand.context.names(),
+            min_scaled_jacobian: r.quality.min,
+            inverted: r.quality.inverted,
+            hausdorff_relative: r.hausdorff_relative,
+            seconds: th.elapsed().as_secs_f64(),
+        });
+        let better = match &best {
+            None => true,
+            Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
+        };
+        if better {
+            best = Some((ci, r));
+        }
+        if best.as_ref().is_some_and(|(_, b)| b.quality.inverted == 0 && b.quality.min >= 0.3) {
+            break; // good enough: do not spend another build
+        }
+    }
+    seconds.push(("hex".to_string(), t1.elapsed().as_secs_f64()));
+    let Some((candidate, hex)) = best else {
+        return Err(last_err.unwrap_or_else(|| Error::Internal("no verified candidate to mesh".into())));
+    };
+    let spline = match &opts.spline {
+        Some(so) => {
+            let t2 = Instant::now();
+            let mut sub = SubProgress { inner: progress, lo: 0.85, hi: 1.0 };
+            let s = build_spline(&hex.mesh, Some(mesh), so, &mut sub)?;
+            seconds.push(("spline".to_string(), t2.elapsed().as_secs_f64()));
+            Some(s)
+        }
+        None => None,
+    };
+    check_progress(progress, 1.0, "done")?;
+    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, hex, spline, seconds })
 }
