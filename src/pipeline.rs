@@ -257,3 +257,18 @@ pub fn run(
     check_progress(progress, 1.0, "done")?;
     Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, hex, spline, seconds })
 }
+
+/// The polycube of a diffused candidate in the user's coordinates (grid -> model frame
+/// -> aligned frame -> user), as a triangle mesh whose vertices are those of the
+/// assembly's boundary quads.
+pub fn polycube_user_mesh(result: &PolycubeResult, c: &Candidate) -> TriMesh {
+    let mut m = crate::polycube::boundary(&c.context.assemble()).to_trimesh();
+    if let Some(inp) = &c.input {
+        for v in m.vertices.iter_mut() {
+            let q = inp.frame.to_normalised(*v);
+            let a = inp.map.inverse(q);
+            *v = result.alignment.transform.apply_inverse(a);
+        }
+    }
+    m
+}

@@ -45,16 +45,7 @@ pub fn progress_bar(quiet: bool) -> impl FnMut(f64, &str) -> bool {
     }
 }
 
-/// The chosen polycube's surface in the user's coordinates (grid -> model frame ->
-/// aligned frame -> user).
+/// The chosen polycube's surface in the user's coordinates.
 pub fn to_user_polycube(result: &PolycubeResult, c: &Candidate) -> TriMesh {
-    let mut m = sddpm::polycube::boundary(&c.context.assemble()).to_trimesh();
-    if let Some(inp) = &c.input {
-        for v in m.vertices.iter_mut() {
-            let q = inp.frame.to_normalised(*v);
-            let a = inp.map.inverse(q);
-            *v = result.alignment.transform.apply_inverse(a);
-        }
-    }
-    m
+    sddpm::pipeline::polycube_user_mesh(result, c)
 }

@@ -9,6 +9,7 @@ mod dataset;
 mod evalmodel;
 mod info;
 mod polycube;
+mod run;
 mod train;
 
 /// Exit code for bad input (DESIGN.md).
@@ -31,6 +32,8 @@ pub enum Command {
     Dataset(dataset::DatasetArgs),
     /// Generate and verify a polycube for a mesh (user-guided or automated).
     Polycube(polycube::PolycubeArgs),
+    /// The main job: polycube, hex mesh, spline, exports and report.html.
+    Run(run::RunArgs),
     /// Measure a model on held-in synthetic inputs (developer command).
     #[command(name = "eval-model")]
     EvalModel(evalmodel::EvalArgs),
@@ -52,6 +55,7 @@ pub fn run() -> i32 {
         Command::Context(args) => context::run(&args).unwrap_or_else(fail),
         Command::Dataset(args) => dataset::run(&args).unwrap_or_else(fail),
         Command::Polycube(args) => polycube::run(&args).unwrap_or_else(fail),
+        Command::Run(args) => run::run(&args).unwrap_or_else(fail),
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
     }

@@ -6,3 +6,6 @@ pub mod bext;
 pub mod hexfmt;
 pub mod lsdyna;
 pub mod spline_vtk;
+pub mod plot;
+pub mod render;
+pub mod report;

@@ -1,0 +1,62 @@
+//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline]`: the main job.
+
+use super::common::{load_checked, Loaded};
+use super::polycube::{load_model, options_of, request_of, PolycubeArgs};
+use sddpm::error::Error;
+use sddpm::export::report::{write_run_folder, InputInfo};
+use sddpm::pipeline::{run as run_job, RunOptions};
+use sddpm::Result;
+
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub polycube: PolycubeArgs,
+    /// Fix the octree subdivision level (default: chosen by the stopping rule).
+    #[arg(long)]
+    pub level: Option<u32>,
+    /// Stop after the hex mesh (no spline.bext / model.k).
+    #[arg(long)]
+    pub no_spline: bool,
+    /// How many verified candidates are meshed; the best mesh is kept.
+    #[arg(long)]
+    pub hex_candidates: Option<usize>,
+}
+
+pub fn run(a: &RunArgs) -> Result<i32> {
+    let t0 = std::time::Instant::now();
+    let p = &a.polycube;
+    let Loaded { mesh, report, path } = load_checked(&p.mesh)?;
+    let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
+    let request = request_of(p)?;
+    let model = load_model(&p.weights)?;
+    std::fs::create_dir_all(&p.output).map_err(|e| Error::io(p.output.display(), e))?;
+    let mut opts = RunOptions { polycube: options_of(p), ..Default::default() };
+    opts.hex.level = a.level;
+    if a.no_spline {
+        opts.spline = None;
+    }
+    if let Some(n) = a.hex_candidates {
+        opts.hex_candidates = n;
+    }
+    let mut progress = super::common::progress_bar(p.quiet);
+    let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
+    let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())?;
+    if p.json {
+        println!("{j}");
+    } else if !p.quiet {
+        let h = &j["hex"];
+        eprintln!(
+            "polycube {} ({} of {} candidates verified); hex: {} elements, min scaled Jacobian {:.3}, {} inverted; {}wrote {} in {:.1} s",
+            j["polycube"]["names"].as_str().unwrap_or("?"),
+            j["polycube"]["verified"],
+            j["polycube"]["candidates"],
+            h["elements"],
+            h["min_scaled_jacobian"].as_f64().unwrap_or(f64::NAN),
+            h["inverted"],
+            if j["spline"].is_null() { String::new() } else { format!("spline: {} basis functions; ", j["spline"]["basis_functions"]) },
+            p.output.display(),
+            t0.elapsed().as_secs_f64()
+        );
+    }
+    Ok(0)
+}

@@ -1,0 +1,177 @@
+//! PNG plots (plotters, bitmap backend) for reports and training logs: histograms
+//! and line plots. Text uses the DejaVu Sans font embedded in the library
+//! (assets/fonts, Bitstream Vera licence), so plots render the same on a machine
+//! without any font installed.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: Once = Once::new();
+const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+fn ensure_font() {
+    FONT.call_once(|| {
+        // the embedded font is valid (checked by the tests); an error here would only
+        // mean that text is not drawn
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES);
+    });
+}
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::io(path.display(), format!("cannot draw the plot: {e}"))
+}
+
+/// Pixel size of every plot.
+pub const WIDTH: u32 = 900;
+pub const HEIGHT: u32 = 520;
+
+/// A histogram of `counts` over equal bins of [lo, hi] as a PNG.
+pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &str, xlabel: &str) -> Result<()> {
+    ensure_font();
+    if counts.is_empty() || !(hi > lo) {
+        return Err(Error::InvalidArgument(format!("histogram needs bins and lo < hi (got {} bins, [{lo}, {hi}])", counts.len())));
+    }
+    let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let ymax = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.08;
+    let w = (hi - lo) / counts.len() as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(lo..hi, 0.0..ymax)
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_desc("count")
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 17))
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .draw_series(counts.iter().enumerate().map(|(i, &c)| {
+            let x0 = lo + i as f64 * w;
+            let colour = if x0 + w <= 0.0 { RGBColor(200, 60, 50) } else { RGBColor(60, 110, 180) };
+            Rectangle::new([(x0 + 0.05 * w, 0.0), (x0 + 0.95 * w, c as f64)], colour.filled())
+        }))
+        .map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+/// One named line of a [`line_png`] plot.
+pub struct Series<'a> {
+    pub name: &'a str,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Line plot of several series as a PNG; `log_y` uses a logarithmic y axis (points
+/// with y <= 0 are then skipped).
+pub fn line_png(path: &Path, series: &[Series], title: &str, xlabel: &str, ylabel: &str, log_y: bool) -> Result<()> {
+    ensure_font();
+    let pts = || series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0));
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for p in pts() {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.1);
+        y1 = y1.max(p.1);
+    }
+    if !x0.is_finite() {
+        return Err(Error::InvalidArgument(format!("{}: nothing to plot", path.display())));
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    if y1 <= y0 {
+        y1 = y0 + y0.abs().max(1e-12);
+    }
+    let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let palette = [RGBColor(60, 110, 180), RGBColor(220, 110, 40), RGBColor(60, 160, 80), RGBColor(170, 60, 160), RGBColor(120, 120, 120)];
+    macro_rules! draw {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(xlabel)
+                .y_desc(ylabel)
+                .label_style(("sans-serif", 15))
+                .axis_desc_style(("sans-serif", 17))
+                .draw()
+                .map_err(|e| plot_err(path, e))?;
+            for (i, s) in series.iter().enumerate() {
+                let c = palette[i % palette.len()];
+                let p: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0)).collect();
+                chart
+                    .draw_series(LineSeries::new(p, c.stroke_width(2)))
+                    .map_err(|e| plot_err(path, e))?
+                    .label(s.name)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            }
+            if series.len() > 1 {
+                chart
+                    .configure_series_labels()
+                    .label_font(("sans-serif", 15))
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(|e| plot_err(path, e))?;
+            }
+        }};
+    }
+    let mut b = ChartBuilder::on(&root);
+    b.caption(title, ("sans-serif", 24)).margin(14).x_label_area_size(44).y_label_area_size(74);
+    if log_y {
+        draw!(b.build_cartesian_2d(x0..x1, (y0..y1 * 1.05).log_scale()).map_err(|e| plot_err(path, e))?);
+    } else {
+        let pad = 0.05 * (y1 - y0);
+        draw!(b.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad)).map_err(|e| plot_err(path, e))?);
+    }
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
+
+/// Horizontal bar chart (one bar per label), e.g. stage timings.
+pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) -> Result<()> {
+    ensure_font();
+    if bars.is_empty() {
+        return Err(Error::InvalidArgument(format!("{}: nothing to plot", path.display())));
+    }
+    let xmax = bars.iter().map(|b| b.1).fold(0.0f64, f64::max).max(1e-9) * 1.1;
+    let n = bars.len();
+    let root = BitMapBackend::new(path, (WIDTH, (120 + 34 * n as u32).max(220))).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(150)
+        .build_cartesian_2d(0.0..xmax, (0..n).into_segmented())
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_labels(n)
+        .y_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) if *i < n => bars[n - 1 - *i].0.clone(),
+            _ => String::new(),
+        })
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 17))
+        .disable_y_mesh()
+        .draw()
+        .map_err(|e| plot_err(path, e))?;
+    chart
+        .draw_series(bars.iter().enumerate().map(|(i, (_, v))| {
+            let r = n - 1 - i;
+            Rectangle::new([(0.0, SegmentValue::Exact(r)), (*v, SegmentValue::Exact(r + 1))], RGBColor(60, 110, 180).filled())
+        }))
+        .map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))?;
+    Ok(())
+}
