@@ -98,6 +98,14 @@ pub struct RunOptions {
     pub hex: HexOptions,
     /// `None` stops after the hex mesh (the command line's `--no-spline`).
     pub spline: Option<SplineOptions>,
+    /// When no candidate passes verification, mesh the diffused candidate with the best
+    /// geometric fit anyway (GOCC passes first) instead of failing; the result says so
+    /// (`RunResult::verified` false, report.json "polycube.verified_choice": false) and
+    /// the diffusion correspondence is then not used to seed the surface map.
+    /// Default true: the hex mesh and the spline are measured on their own (scaled
+    /// Jacobian, Hausdorff distance), so an unverified polycube is a warning, not a
+    /// wrong answer. Set false to refuse (VERIFICATION_FAILED).
+    pub accept_unverified: bool,
     /// How many verified candidates (best score first) are meshed; the one whose hex
     /// mesh has the fewest inverted elements, then the highest minimum scaled Jacobian,
     /// is kept (default 2: a second candidate costs one more hex build and often
@@ -112,6 +120,7 @@ impl Default for RunOptions {
             auto: AutoOptions::default(),
             hex: HexOptions::default(),
             spline: Some(SplineOptions::default()),
+            accept_unverified: true,
             hex_candidates: 2,
         }
     }
@@ -135,6 +144,10 @@ pub struct RunResult {
     /// Index (into `polycube.candidates`) of the candidate that was meshed and kept.
     pub candidate: usize,
     pub hex_attempts: Vec<HexAttempt>,
+    /// False when the meshed candidate did not pass verification (`accept_unverified`).
+    pub verified: bool,
+    /// The verification error that `accept_unverified` overrode.
+    pub verification_error: Option<String>,
     pub hex: HexResult,
     /// The spline fitted to the input surface (None with `spline: None`).
     pub spline: Option<Spline>,
@@ -189,9 +202,41 @@ pub fn run(
         generate_polycube(model, mesh, genus, request, &opts.polycube, &opts.auto, &mut sub)?
     };
     seconds.push(("polycube".to_string(), t0.elapsed().as_secs_f64()));
+    let verification_error = err.as_ref().map(|e| e.to_string());
+    let mut hex_opts = opts.hex.clone();
+    let mut order: Vec<usize>;
     if let Some(e) = err {
-        return Err(e);
+        let fallback = fallback_candidate(&pr);
+        match fallback {
+            Some(i) if opts.accept_unverified && matches!(e, Error::VerificationFailed(_)) => {
+                order = vec![i];
+                hex_opts.use_correspondence = false;
+            }
+            _ => return Err(e),
+        }
+    } else {
+        order = ranked_verified(&pr);
     }
+    order.truncate(opts.hex_candidates.max(1));
+    let verified = verification_error.is_none();
+    let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
+    seconds.push(("hex".to_string(), t0.elapsed().as_secs_f64() - seconds[0].1));
+    let spline = match &opts.spline {
+        Some(so) => {
+            let t2 = Instant::now();
+            let mut sub = SubProgress { inner: progress, lo: 0.85, hi: 1.0 };
+            let s = build_spline(&hex.mesh, Some(mesh), so, &mut sub)?;
+            seconds.push(("spline".to_string(), t2.elapsed().as_secs_f64()));
+            Some(s)
+        }
+        None => None,
+    };
+    check_progress(progress, 1.0, "done")?;
+    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, verified, verification_error, hex, spline, seconds })
+}
+
+/// Verified candidates, the chosen one first, then by score.
+pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
     let mut order: Vec<usize> = (0..pr.candidates.len()).filter(|&i| pr.candidates[i].stage == crate::context::generate::Stage::Verified).collect();
     order.sort_by(|&a, &b| {
         let sa = pr.candidates[a].score.unwrap_or(f64::INFINITY);
@@ -202,8 +247,32 @@ pub fn run(
         order.retain(|&i| i != c);
         order.insert(0, c);
     }
-    order.truncate(opts.hex_candidates.max(1));
-    let t1 = Instant::now();
+    order
+}
+
+/// The diffused candidate to mesh when none passed verification: GOCC passes first,
+/// then the best geometric fit of the input to the polycube.
+pub fn fallback_candidate(pr: &PolycubeResult) -> Option<usize> {
+    use crate::context::generate::Stage;
+    (0..pr.candidates.len())
+        .filter(|&i| pr.candidates[i].input.is_some() && matches!(pr.candidates[i].stage, Stage::Tcv | Stage::Gocc | Stage::Verified))
+        .min_by(|&a, &b| {
+            let (ca, cb) = (&pr.candidates[a], &pr.candidates[b]);
+            ((ca.stage == Stage::Gocc) as u8, ca.fit).partial_cmp(&((cb.stage == Stage::Gocc) as u8, cb.fit)).unwrap_or(std::cmp::Ordering::Equal)
+        })
+}
+
+/// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh:
+/// fewest inverted elements, then highest minimum scaled Jacobian; stops early once a
+/// mesh has no inverted element and a minimum scaled Jacobian of at least 0.3.
+/// Progress: 50-85 % of the caller's range.
+pub fn build_hex_for_polycube(
+    pr: &PolycubeResult,
+    order: &[usize],
+    mesh: &TriMesh,
+    hex_opts: &HexOptions,
+    progress: &mut dyn Progress,
+) -> Result<(usize, Vec<HexAttempt>, HexResult)> {
     let mut best: Option<(usize, HexResult)> = None;
     let mut attempts = Vec::new();
     let n = order.len();
@@ -213,7 +282,7 @@ pub fn run(
         let input = hex_input(&pr, cand, mesh)?;
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: 0.5 + 0.35 * k as f64 / n as f64, hi: 0.5 + 0.35 * (k + 1) as f64 / n as f64 };
-        let r = match build_hex_mesh(&input, &opts.hex, &mut sub) {
+        let r = match build_hex_mesh(&input, hex_opts, &mut sub) {
             Ok(r) => r,
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(e) => {
@@ -240,22 +309,10 @@ pub fn run(
             break; // good enough: do not spend another build
         }
     }
-    seconds.push(("hex".to_string(), t1.elapsed().as_secs_f64()));
-    let Some((candidate, hex)) = best else {
-        return Err(last_err.unwrap_or_else(|| Error::Internal("no verified candidate to mesh".into())));
-    };
-    let spline = match &opts.spline {
-        Some(so) => {
-            let t2 = Instant::now();
-            let mut sub = SubProgress { inner: progress, lo: 0.85, hi: 1.0 };
-            let s = build_spline(&hex.mesh, Some(mesh), so, &mut sub)?;
-            seconds.push(("spline".to_string(), t2.elapsed().as_secs_f64()));
-            Some(s)
-        }
-        None => None,
-    };
-    check_progress(progress, 1.0, "done")?;
-    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, hex, spline, seconds })
+    match best {
+        Some((candidate, hex)) => Ok((candidate, attempts, hex)),
+        None => Err(last_err.unwrap_or_else(|| Error::Internal("no candidate to mesh".into()))),
+    }
 }
 
 /// The polycube of a diffused candidate in the user's coordinates (grid -> model frame

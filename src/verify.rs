@@ -111,7 +111,8 @@ pub fn templates(n: usize) -> Vec<Vec<[f64; 3]>> {
         .collect()
 }
 
-fn cached_templates(n: usize) -> std::sync::Arc<Vec<Vec<[f64; 3]>>> {
+/// The templates of [`templates`], computed once per point count and shared.
+pub fn cached_templates(n: usize) -> std::sync::Arc<Vec<Vec<[f64; 3]>>> {
     use std::sync::{Arc, Mutex, OnceLock};
     static CACHE: OnceLock<Mutex<Vec<(usize, Arc<Vec<Vec<[f64; 3]>>>)>>> = OnceLock::new();
     let c = CACHE.get_or_init(|| Mutex::new(Vec::new()));
@@ -153,6 +154,21 @@ fn one_sided(from: &[[f64; 3]], to: &ImmutableKdTree<f64, 3>, tau: f64, p: f64) 
         s += penalty(d, tau, p);
     }
     s / from.len().max(1) as f64
+}
+
+/// A cell's active points (model frame) centred and expressed in cell units: what
+/// TCV compares with the templates.
+pub fn local_points(pts: &[[f64; 3]], cell_edge: f64) -> Vec<[f64; 3]> {
+    centre(pts).iter().map(|p| p.map(|v| v / cell_edge)).collect()
+}
+
+/// The active points (norm above `zero_norm`) of cell block `n` of an output tensor.
+pub fn active_points(output: &[f32], n: usize, zero_norm: f64) -> Vec<[f64; 3]> {
+    unlayout(output)[n]
+        .iter()
+        .map(|p| p.map(|v| v as f64))
+        .filter(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() > zero_norm)
+        .collect()
 }
 
 /// Penalty Chamfer distance between two point sets.
@@ -249,7 +265,7 @@ pub fn verify(output: &[f32], ctx: &Context, frame: &BoxFrame, opts: &VerifyOpti
             }
             // TCV on the centred points in cell units.
             if pts.len() >= opts.min_points {
-                let local: Vec<[f64; 3]> = centre(&pts).iter().map(|p| p.map(|v| v / cell_edge)).collect();
+                let local = local_points(&pts, cell_edge);
                 let mut best = (f64::INFINITY, Primitive::Null);
                 for p in Primitive::solids() {
                     let d = pcd(&local, &tpl[p.label() as usize], opts.tau_cd, opts.penalty_p);

@@ -32,6 +32,12 @@ pub struct EvalArgs {
     /// TCV threshold tau_CD (squared cell units).
     #[arg(long)]
     pub tau_cd: Option<f64>,
+    /// Reverse diffusion starts at this step from the forward-noised input (0 = T).
+    #[arg(long)]
+    pub start_step: Option<usize>,
+    /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
+    #[arg(long)]
+    pub sweep: bool,
 }
 
 pub fn run(a: &EvalArgs) -> Result<i32> {
@@ -43,8 +49,22 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if let Some(s) = a.steps {
         opts.sampler.steps = s;
     }
+    if let Some(t) = a.start_step {
+        opts.sampler.start_step = t;
+    }
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
+    }
+    if a.sweep {
+        let taus = [0.005, 0.01, 0.015, 0.02, 0.03, 0.05, 0.08];
+        let ps = [1.0, 2.0];
+        let rows = sddpm::diffusion::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps)?;
+        println!("| tau_CD | p | true accepted | target nearest (cells) | wrong accepted |");
+        println!("|---|---|---|---|---|");
+        for r in &rows {
+            println!("| {} | {} | {}/{} | {}/{} | {}/{} |", r.tau_cd, r.penalty_p, r.true_accepted, r.true_cases, r.true_cells_nearest, r.true_cells, r.wrong_accepted, r.wrong_cases);
+        }
+        return Ok(0);
     }
     let s = evaluate(&model, a.seed, a.cases, a.min, a.max, &opts, a.wrong)?;
     println!("{}", serde_json::to_string_pretty(&s).unwrap());

@@ -36,6 +36,9 @@ pub struct PolycubeArgs {
     /// Reverse-diffusion steps (0 = the full T-step sampler; default: the library's default).
     #[arg(long)]
     pub steps: Option<usize>,
+    /// Reverse diffusion starts at this step from the forward-noised input (0 = T; default: the library's default).
+    #[arg(long)]
+    pub start_step: Option<usize>,
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
@@ -68,6 +71,9 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     o.sampler.seed = a.seed;
     if let Some(s) = a.steps {
         o.sampler.steps = s;
+    }
+    if let Some(s) = a.start_step {
+        o.sampler.start_step = s;
     }
     o
 }

@@ -17,6 +17,10 @@ pub struct RunArgs {
     /// Stop after the hex mesh (no spline.bext / model.k).
     #[arg(long)]
     pub no_spline: bool,
+    /// Refuse (exit 2) when no candidate passes verification instead of meshing the
+    /// best-fitting unverified one.
+    #[arg(long)]
+    pub strict: bool,
     /// How many verified candidates are meshed; the best mesh is kept.
     #[arg(long)]
     pub hex_candidates: Option<usize>,
@@ -35,12 +39,18 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     if a.no_spline {
         opts.spline = None;
     }
+    opts.accept_unverified = !a.strict;
     if let Some(n) = a.hex_candidates {
         opts.hex_candidates = n;
     }
     let mut progress = super::common::progress_bar(p.quiet);
     let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
     let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())?;
+    if let Some(e) = &r.verification_error {
+        if !p.quiet || p.json {
+            eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
+        }
+    }
     if p.json {
         println!("{j}");
     } else if !p.quiet {

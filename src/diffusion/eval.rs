@@ -124,3 +124,89 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
     s.seconds = t0.elapsed().as_secs_f64();
     Ok(s)
 }
+
+/// One cell of a diffused case, for the TCV threshold sweep.
+struct SweepCell {
+    local: Vec<[f64; 3]>,
+    target: Primitive,
+}
+
+/// TCV acceptance for one (tau_CD, p) pair.
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepRow {
+    pub tau_cd: f64,
+    pub penalty_p: f64,
+    /// True contexts whose every cell passes TCV (of those that passed GOCC).
+    pub true_accepted: usize,
+    pub true_cases: usize,
+    /// Cells of true contexts whose target template is the nearest.
+    pub true_cells_nearest: usize,
+    pub true_cells: usize,
+    /// Wrong contexts whose every cell passes TCV (false acceptances).
+    pub wrong_accepted: usize,
+    pub wrong_cases: usize,
+}
+
+/// The measurement behind `VerifyOptions::tau_cd` and `penalty_p`: diffuse `n` held-in
+/// cases with their true context and with a wrong genus-consistent one, then count, for
+/// every pair of the grid, how many true contexts TCV accepts and how many wrong ones
+/// it accepts. GOCC failures and pre-check refusals are left out (TCV never sees them).
+pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<Vec<SweepRow>> {
+    let synth = SyntheticOptions::default();
+    let tpl = crate::verify::cached_templates(opts.verify.template_points);
+    let mut truth: Vec<Vec<SweepCell>> = Vec::new();
+    let mut wrong: Vec<Vec<SweepCell>> = Vec::new();
+    let collect = |c: &Candidate| -> Option<Vec<SweepCell>> {
+        let (out, inp) = (c.output.as_ref()?, c.input.as_ref()?);
+        if !c.report.as_ref().is_some_and(|r| r.gocc_pass) {
+            return None;
+        }
+        Some(
+            c.context
+                .occupied()
+                .map(|k| SweepCell { local: crate::verify::local_points(&crate::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale), target: c.context.labels[k] })
+                .collect(),
+        )
+    };
+    for (i, (ctx, mesh)) in cases(seed, n, min, max, &synth).into_iter().enumerate() {
+        let g = ctx.validity().genus.unwrap();
+        let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
+        if let Some(v) = collect(&r.candidates[0]) {
+            truth.push(v);
+        }
+        if let Some(w) = wrong_context(&ctx, i as u64) {
+            let r = generate_from_contexts(model, &mesh, g, &[w], opts, &mut NoProgress)?;
+            if let Some(v) = collect(&r.candidates[0]) {
+                wrong.push(v);
+            }
+        }
+    }
+    let mut rows = Vec::new();
+    for &p in ps {
+        for &tau in taus {
+            let judge = |cells: &[SweepCell]| -> (bool, usize) {
+                let mut all = true;
+                let mut nearest = 0;
+                for c in cells {
+                    let d: Vec<f64> = Primitive::solids().map(|q| crate::verify::pcd(&c.local, &tpl[q.label() as usize], tau, p)).collect();
+                    let dt = d[c.target.label() as usize - 1];
+                    let best = d.iter().cloned().fold(f64::INFINITY, f64::min);
+                    let near = dt <= best;
+                    nearest += near as usize;
+                    all &= near && dt <= tau;
+                }
+                (all, nearest)
+            };
+            let mut row = SweepRow { tau_cd: tau, penalty_p: p, true_accepted: 0, true_cases: truth.len(), true_cells_nearest: 0, true_cells: 0, wrong_accepted: 0, wrong_cases: wrong.len() };
+            for t in &truth {
+                let (a, k) = judge(t);
+                row.true_accepted += a as usize;
+                row.true_cells_nearest += k;
+                row.true_cells += t.len();
+            }
+            row.wrong_accepted = wrong.iter().filter(|w| judge(w).0).count();
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}

@@ -42,16 +42,37 @@ pub struct SamplerOptions {
     /// Use the raw input geometry as x'_T without forward noising (DESIGN.md's literal
     /// reading; measured to be worse, see BENCHMARKS.md).
     pub raw_start: bool,
+    /// Denoising passes after the last step: the output x is taken as the x_0 of a
+    /// noise-free forward state at `refine_t` (x_t = sqrt(ab) x + Q_t q), the network
+    /// predicts the noise and x moves to the predicted x_0. Each pass pulls points that
+    /// the reverse process left off the learned surface back onto it.
+    pub refine_passes: usize,
+    /// Timestep of the refinement passes.
+    pub refine_t: usize,
 }
 
 impl Default for SamplerOptions {
     fn default() -> Self {
-        SamplerOptions { steps: DEFAULT_STEPS, seed: 0, keep_every: 0, max_batch: 16, start_step: 0, raw_start: false }
+        SamplerOptions {
+            steps: DEFAULT_STEPS,
+            seed: 0,
+            keep_every: 0,
+            max_batch: 16,
+            start_step: DEFAULT_START_STEP,
+            raw_start: false,
+            refine_passes: DEFAULT_REFINE_PASSES,
+            refine_t: DEFAULT_REFINE_T,
+        }
     }
 }
 
 /// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
 pub const DEFAULT_STEPS: usize = 50;
+/// Default start step (0 = T), chosen by the measurement in BENCHMARKS.md.
+pub const DEFAULT_START_STEP: usize = 0;
+/// Default refinement passes and their timestep (BENCHMARKS.md).
+pub const DEFAULT_REFINE_PASSES: usize = 0;
+pub const DEFAULT_REFINE_T: usize = 20;
 
 /// Output of a batch: one [3, 64, 96] tensor per candidate, and the kept states.
 #[derive(Debug, Clone, Default)]
@@ -180,6 +201,38 @@ pub fn reverse_diffusion(
             if opts.keep_every > 0 && ((si + 1) % opts.keep_every == 0 || s == 0) {
                 for i in 0..b {
                     out.trajectory[start + i].push((s, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                }
+            }
+        }
+        if opts.refine_passes > 0 {
+            let t = opts.refine_t.clamp(1, sched.steps());
+            let (sa, sd, shift) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt(), sched.qcoef[t]);
+            for _ in 0..opts.refine_passes {
+                let mut xt = x.clone();
+                for (k, v) in xt.iter_mut().enumerate() {
+                    let ch = (k % TENSOR_LEN) / (TENSOR_H * TENSOR_W);
+                    *v = (sa * *v as f64 + shift * sched.config.q[ch]) as f32;
+                }
+                let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &model.device);
+                let eps: Vec<f32> = model
+                    .net
+                    .forward(xt_t, &vec![t; b], ctx_t.clone())
+                    .into_data()
+                    .try_into_vec::<f32>()
+                    .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
+                for (k, v) in x.iter_mut().enumerate() {
+                    *v -= (sd / sa * eps[k] as f64) as f32;
+                }
+                for i in 0..b {
+                    let ctx = &contexts[start + i];
+                    for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
+                        for p in 0..POINTS_PER_CELL {
+                            let (r, col) = slot(n, p);
+                            for ch in 0..3 {
+                                x[i * TENSOR_LEN + flat(ch, r, col)] = 0.0;
+                            }
+                        }
+                    }
                 }
             }
         }

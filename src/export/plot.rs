@@ -48,6 +48,7 @@ pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &st
         .configure_mesh()
         .x_desc(xlabel)
         .y_desc("count")
+        .y_label_formatter(&|v| format!("{v:.0}"))
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
         .draw()

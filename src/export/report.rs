@@ -109,6 +109,8 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
             "fit": cand.fit,
             "score": cand.score,
             "file": POLYCUBE_OBJ,
+            "verified_choice": r.verified,
+            "verification_error": r.verification_error,
             "timings": r.polycube.timings,
             "auto": r.auto,
         },
@@ -176,6 +178,9 @@ th{background:#f2f2f2}.pics img{border:1px solid #ddd;margin:4px;max-width:32%}.
         ("area", num(&inp["area"])),
     ]));
     s.push_str("<h2>Polycube</h2>");
+    if let Some(e) = &r.verification_error {
+        let _ = write!(s, "<p class=\"bad\"><b>Unverified polycube.</b> No candidate passed verification ({}); the candidate with the best geometric fit was meshed instead. Revise the context, try other splitting ratios, or run with --strict to refuse.</p>", esc(e));
+    }
     s.push_str(&table(&[
         ("context", num(&pc["names"])),
         ("labels", esc(&pc["labels"].to_string())),
