@@ -205,15 +205,36 @@ pub fn run(
     let verification_error = err.as_ref().map(|e| e.to_string());
     let mut hex_opts = opts.hex.clone();
     let mut order: Vec<usize>;
+    let mut pr = pr;
     if let Some(e) = err {
-        let fallback = fallback_candidate(&pr);
-        match fallback {
-            Some(i) if opts.accept_unverified && matches!(e, Error::VerificationFailed(_)) => {
-                order = vec![i];
-                hex_opts.use_correspondence = false;
-            }
-            _ => return Err(e),
+        if !(opts.accept_unverified && matches!(e, Error::VerificationFailed(_))) {
+            return Err(e);
         }
+        let i = match fallback_candidate(&pr) {
+            Some(i) => i,
+            None => {
+                // nothing was diffused (every candidate refused by the pre-check): diffuse
+                // the best-fitting candidate without the pre-check's limits
+                let best = (0..pr.candidates.len())
+                    .filter(|&i| pr.candidates[i].context.validity().genus == Some(genus))
+                    .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit))
+                    .ok_or(e)?;
+                let ctx = pr.candidates[best].context;
+                let mut po = opts.polycube.clone();
+                po.max_fit = f64::INFINITY;
+                po.max_in_empty_fraction = 1.0;
+                po.min_occupied_fraction = 0.0;
+                let mut sub = SubProgress { inner: progress, lo: 0.45, hi: 0.5 };
+                let r = generate_from_contexts(model, mesh, genus, &[ctx], &po, &mut sub)?;
+                let Some(c) = r.candidates.into_iter().find(|c| c.input.is_some()) else {
+                    return Err(Error::VerificationFailed(format!("{}; the best-fitting candidate {ctx} could not be diffused either", verification_error.clone().unwrap_or_default())));
+                };
+                pr.candidates.push(c);
+                pr.candidates.len() - 1
+            }
+        };
+        order = vec![i];
+        hex_opts.use_correspondence = false;
     } else {
         order = ranked_verified(&pr);
     }

@@ -188,9 +188,11 @@ impl PolycubeResult {
             }
         } else if let Some(c) = self.candidates.first() {
             s.push_str(&format!(
-                "; first: {} leaves {:.1}% of the surface in empty cells",
+                "; first: {} leaves {:.1}% of the surface in empty cells, {} starved cell(s), geometric fit {:.4} (squared cell units)",
                 c.context,
-                100.0 * c.occupancy.in_empty_cells
+                100.0 * c.occupancy.in_empty_cells,
+                c.occupancy.starved_cells.len(),
+                c.fit
             ));
         }
         if self.source == "user" {
