@@ -8,6 +8,7 @@ mod context;
 mod dataset;
 mod evalmodel;
 mod info;
+mod plotloss;
 mod polycube;
 mod run;
 mod train;
@@ -37,6 +38,9 @@ pub enum Command {
     /// Measure a model on held-in synthetic inputs (developer command).
     #[command(name = "eval-model")]
     EvalModel(evalmodel::EvalArgs),
+    /// Plot a training loss log (loss.csv) as PNGs: whole run, last part, gradient.
+    #[command(name = "plot-loss")]
+    PlotLoss(plotloss::PlotLossArgs),
     /// Train the diffusion model (checkpoints every epoch; --resume continues).
     Train(train::TrainArgs),
 }
@@ -58,6 +62,7 @@ pub fn run() -> i32 {
         Command::Run(args) => run::run(&args).unwrap_or_else(fail),
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
+        Command::PlotLoss(args) => plotloss::run(&args).unwrap_or_else(fail),
     }
 }
 

@@ -64,6 +64,24 @@ pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &st
     Ok(())
 }
 
+/// Axis label: at most 3 significant digits, scientific notation for small or large values.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        let digits = (2 - a.log10().floor() as i32).clamp(0, 6) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    }
+}
+
 /// One named line of a [`line_png`] plot.
 pub struct Series<'a> {
     pub name: &'a str,
@@ -101,6 +119,8 @@ pub fn line_png(path: &Path, series: &[Series], title: &str, xlabel: &str, ylabe
                 .configure_mesh()
                 .x_desc(xlabel)
                 .y_desc(ylabel)
+                .y_label_formatter(&|v: &f64| short(*v))
+                .x_label_formatter(&|v: &f64| short(*v))
                 .label_style(("sans-serif", 15))
                 .axis_desc_style(("sans-serif", 17))
                 .draw()
