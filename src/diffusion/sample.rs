@@ -69,7 +69,7 @@ impl Default for SamplerOptions {
 /// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
 pub const DEFAULT_STEPS: usize = 50;
 /// Default start step (0 = T), chosen by the measurement in BENCHMARKS.md.
-pub const DEFAULT_START_STEP: usize = 0;
+pub const DEFAULT_START_STEP: usize = 200;
 /// Default refinement passes and their timestep (BENCHMARKS.md).
 pub const DEFAULT_REFINE_PASSES: usize = 0;
 pub const DEFAULT_REFINE_T: usize = 20;
