@@ -20,7 +20,8 @@ fn main() {
     let exact = sample_cells(&ctx, 1.0, &mut rng);
     let x0 = layout(&exact);
     let frame = context_frame(&ctx).unwrap();
-    let out = reverse_diffusion(&model, &[x0.clone()], &[ctx], &SamplerOptions { steps, start_step, refine_passes, refine_t, ..Default::default() }, &mut NoProgress).unwrap();
+    let cond = args.get(7).map(|c| Context::parse(c).unwrap()).unwrap_or(ctx);
+    let out = reverse_diffusion(&model, &[x0.clone()], &[cond], &SamplerOptions { steps, start_step, refine_passes, refine_t, ..Default::default() }, &mut NoProgress).unwrap();
     let tpl = cached_templates(2048);
     {
         use sddpm::export::render::{render_png, Camera, Layer};

@@ -10,15 +10,6 @@ use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
 use sddpm::mesh::{LoadOptions, TriMesh};
 use sddpm::polycube::dataset::context_frame;
 
-fn signed_volume(t: &TriMesh) -> f64 {
-    t.triangles
-        .iter()
-        .map(|tr| {
-            let [a, b, c] = tr.map(|i| t.vertices[i as usize]);
-            dot(a, cross(b, c)) / 6.0
-        })
-        .sum()
-}
 
 /// The polycube's own boundary in the normalised frame, every quad split k x k, then
 /// moved by `deform`.
@@ -110,7 +101,7 @@ fn synthetic_thc_and_bhc_are_valid_with_the_input_volume() {
         let ctx = Context::parse(labels).unwrap();
         let surface = polycube_surface(&ctx, 6, bend);
         let user = TriMesh { vertices: surface.vertices.iter().map(|&p| to_user.apply(p)).collect(), triangles: surface.triangles.clone() };
-        let vol = signed_volume(&user);
+        let vol = user.signed_volume();
         let input = HexInput { surface, context: ctx, correspondence: vec![], to_user };
         let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
         assert_eq!(r.quality.inverted, 0, "{labels}");
@@ -127,7 +118,7 @@ fn synthetic_thc_and_bhc_are_valid_with_the_input_volume() {
 fn real(file: &str, labels: &str) -> (HexInput, f64) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     let mesh = TriMesh::load(dir.join(file), &LoadOptions::default()).unwrap();
-    let vol = signed_volume(&mesh);
+    let vol = mesh.signed_volume();
     (HexInput::from_user_mesh(&mesh, Context::parse(labels).unwrap()).unwrap(), vol)
 }
 

@@ -152,19 +152,7 @@ mod tests {
 
     #[test]
     fn write_read_round_trip_and_reference_meshes() {
-        let m = HexMesh {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 0.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [0.0, 1.0, 1.0],
-            ],
-            elements: vec![[0, 1, 2, 3, 4, 5, 6, 7]],
-        };
+        let m = HexMesh::unit_cube();
         let t = to_vtk_legacy(&m, "unit", &[("scaled_jacobian", &[1.0])]);
         assert_eq!(parse_vtk_legacy(&t).unwrap(), m);
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/reference_hex");

@@ -29,6 +29,12 @@ pub struct HexMesh {
 }
 
 impl HexMesh {
+    /// The unit cube [0, 1]^3 as one element (a fixture for tests and examples).
+    pub fn unit_cube() -> HexMesh {
+        let nodes = (0..8).map(|i: usize| [((i + 1) / 2 % 2) as f64, (i / 2 % 2) as f64, (i / 4) as f64]).collect();
+        HexMesh { nodes, elements: vec![[0, 1, 2, 3, 4, 5, 6, 7]] }
+    }
+
     pub fn element_corners(&self, e: usize) -> [[f64; 3]; 8] {
         self.elements[e].map(|i| self.nodes[i as usize])
     }

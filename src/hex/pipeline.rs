@@ -224,16 +224,6 @@ fn summary(m: &HexMesh) -> QualitySummary {
     summarize(&element_qualities(m))
 }
 
-fn signed_volume(t: &TriMesh) -> f64 {
-    t.triangles
-        .iter()
-        .map(|tr| {
-            let [a, b, c] = tr.map(|i| t.vertices[i as usize]);
-            dot(a, cross(b, c)) / 6.0
-        })
-        .sum()
-}
-
 /// Spread the boundary nodes on the surface (plain tangential Laplacian), take the
 /// harmonic interior when it is better than the current one, and fit again.
 fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &HexOptions, fit_stats: &mut Vec<optimize::FitStats>) {
@@ -329,7 +319,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     let frame: BoxFrame = context_frame(&input.context).expect("valid context has cells");
     let grid = input.context.assemble();
     let mut mesh_n = input.surface.clone();
-    if signed_volume(&mesh_n) < 0.0 {
+    if mesh_n.signed_volume() < 0.0 {
         for t in mesh_n.triangles.iter_mut() {
             t.swap(1, 2);
         }
@@ -679,7 +669,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
             *e = [e[4], e[5], e[6], e[7], e[0], e[1], e[2], e[3]];
         }
     }
-    let input_volume = signed_volume(&TriMesh { vertices: sw.mesh.vertices.clone(), triangles: sw.mesh.triangles.clone() }) * s_inv.powi(3);
+    let input_volume = sw.mesh.signed_volume() * s_inv.powi(3);
     let volume = mesh_volume(&out);
     let sj = element_qualities(&out);
     let quality = summarize(&sj);
@@ -707,18 +697,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
 mod tests {
     use super::*;
 
-    fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
-        let v: Vec<[f64; 3]> = (0..8)
-            .map(|i| [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }])
-            .collect();
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let mut t = Vec::new();
-        for q in quads {
-            t.push([q[0], q[1], q[2]]);
-            t.push([q[0], q[2], q[3]]);
-        }
-        TriMesh { vertices: v, triangles: t }
-    }
+    use crate::hex::surface::tests::box_mesh;
 
     #[test]
     fn unit_box_maps_to_a_perfect_grid() {

@@ -27,9 +27,9 @@ pub struct Features {
 /// on `mesh` and chain them into curves split at corners. A vertex is a corner when
 /// its number of sharp edges is not 2, or when its two sharp edges turn by more than
 /// `turn_deg`.
-pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Features {
-    let normals: Vec<[f64; 3]> = mesh
-        .triangles
+/// Unit normal of every triangle (zero for a degenerate one).
+fn unit_normals(mesh: &TriMesh) -> Vec<[f64; 3]> {
+    mesh        .triangles
         .iter()
         .map(|t| {
             let n = tri_normal(mesh.vertices[t[0] as usize], mesh.vertices[t[1] as usize], mesh.vertices[t[2] as usize]);
@@ -40,7 +40,11 @@ pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Feature
                 [0.0; 3]
             }
         })
-        .collect();
+        .collect()
+}
+
+pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Features {
+    let normals = unit_normals(mesh);
     let mut edge_tris: HashMap<[u32; 2], Vec<u32>> = HashMap::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
@@ -205,19 +209,7 @@ pub struct Surface {
 
 impl Surface {
     pub fn new(mesh: TriMesh, features: Features) -> Surface {
-        let normals = mesh
-            .triangles
-            .iter()
-            .map(|t| {
-                let n = tri_normal(mesh.vertices[t[0] as usize], mesh.vertices[t[1] as usize], mesh.vertices[t[2] as usize]);
-                let l = norm(n);
-                if l > 0.0 {
-                    scale(n, 1.0 / l)
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect();
+        let normals = unit_normals(&mesh);
         let bvh = Bvh::new(&mesh);
         let bbox = Aabb::of_points(&mesh.vertices);
         Surface { mesh, normals, bvh, features, bbox }
@@ -321,7 +313,7 @@ impl Surface {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     pub(crate) fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {

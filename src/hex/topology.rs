@@ -156,19 +156,7 @@ mod tests {
 
     #[test]
     fn unit_cube_faces_volume() {
-        let m = HexMesh {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 0.0, 1.0],
-                [1.0, 1.0, 1.0],
-                [0.0, 1.0, 1.0],
-            ],
-            elements: vec![[0, 1, 2, 3, 4, 5, 6, 7]],
-        };
+        let m = HexMesh::unit_cube();
         assert!((mesh_volume(&m) - 1.0).abs() < 1e-14);
         let b = boundary_quads(&m).unwrap();
         assert_eq!(b.len(), 6);

@@ -70,6 +70,12 @@ pub struct LoadStats {
 }
 
 impl TriMesh {
+    /// Signed volume enclosed by the triangles (divergence theorem; positive for a
+    /// closed, outward-oriented surface).
+    pub fn signed_volume(&self) -> f64 {
+        (0..self.triangles.len()).map(|t| check::signed_volume_of(self, t)).sum()
+    }
+
     /// Read an OBJ, STL (ASCII or binary) or OFF file, chosen by extension or,
     /// failing that, by content; then weld and clean as `opts` says.
     /// Unreadable files give `Error::Io` / `Error::Parse`; empty meshes and
