@@ -21,7 +21,8 @@ fn main() {
     let x0 = layout(&exact);
     let frame = context_frame(&ctx).unwrap();
     let cond = args.get(7).map(|c| Context::parse(c).unwrap()).unwrap_or(ctx);
-    let out = reverse_diffusion(&model, &[x0.clone()], &[cond], &SamplerOptions { steps, start_step, refine_passes, refine_t, ..Default::default() }, &mut NoProgress).unwrap();
+    let clip_margin: f64 = std::env::var("CLIP").ok().map(|v| v.parse().unwrap()).unwrap_or(-1.0);
+    let out = reverse_diffusion(&model, &[x0.clone()], &[cond], &SamplerOptions { steps, start_step, refine_passes, refine_t, clip_margin, ..Default::default() }, &mut NoProgress).unwrap();
     let tpl = cached_templates(2048);
     {
         use sddpm::export::render::{render_png, Camera, Layer};
