@@ -106,6 +106,10 @@ pub struct RunOptions {
     /// Jacobian, Hausdorff distance), so an unverified polycube is a warning, not a
     /// wrong answer. Set false to refuse (VERIFICATION_FAILED).
     pub accept_unverified: bool,
+    /// Refuse (MESHING_FAILED, naming the inverted elements) a hex mesh that still has
+    /// inverted elements after quality improvement, instead of returning it with
+    /// them counted in the report (default false).
+    pub require_valid_hex: bool,
     /// How many verified candidates (best score first) are meshed; the one whose hex
     /// mesh has the fewest inverted elements, then the highest minimum scaled Jacobian,
     /// is kept (default 2: a second candidate costs one more hex build and often
@@ -121,6 +125,7 @@ impl Default for RunOptions {
             hex: HexOptions::default(),
             spline: Some(SplineOptions::default()),
             accept_unverified: true,
+            require_valid_hex: false,
             hex_candidates: 2,
         }
     }
@@ -242,6 +247,17 @@ pub fn run(
     let verified = verification_error.is_none();
     let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
     seconds.push(("hex".to_string(), t0.elapsed().as_secs_f64() - seconds[0].1));
+    if opts.require_valid_hex && hex.quality.inverted > 0 {
+        let bad: Vec<String> = hex.scaled_jacobian.iter().enumerate().filter(|(_, &q)| !(q > 0.0)).take(5).map(|(e, q)| format!("{e} ({q:.3})")).collect();
+        return Err(Error::MeshingFailed(format!(
+            "{} of {} hex elements are inverted after quality improvement (first: element {}) for polycube {}{}; try another context or splitting ratios, or a fixed --level",
+            hex.quality.inverted,
+            hex.quality.elements,
+            bad.join(", element "),
+            pr.candidates[candidate].context,
+            if verified { "" } else { " (unverified)" }
+        )));
+    }
     let spline = match &opts.spline {
         Some(so) => {
             let t2 = Instant::now();

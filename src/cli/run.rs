@@ -18,7 +18,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub no_spline: bool,
     /// Refuse (exit 2) when no candidate passes verification instead of meshing the
-    /// best-fitting unverified one.
+    /// best-fitting unverified one, and when the hex mesh keeps inverted elements.
     #[arg(long)]
     pub strict: bool,
     /// How many verified candidates are meshed; the best mesh is kept.
@@ -40,6 +40,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
         opts.spline = None;
     }
     opts.accept_unverified = !a.strict;
+    opts.require_valid_hex = a.strict;
     if let Some(n) = a.hex_candidates {
         opts.hex_candidates = n;
     }

@@ -69,6 +69,14 @@ impl Format {
 
 pub(crate) fn read_file(path: &Path) -> Result<(Vec<u8>, Format)> {
     let shown = path.display();
+    let len = std::fs::metadata(path).map_err(|e| Error::io(&shown, e))?.len();
+    if len > super::MAX_FILE_BYTES {
+        return Err(Error::LimitExceeded(format!(
+            "{shown}: the file has {len} bytes, more than the {} bytes a mesh file may have (about {} triangles)",
+            super::MAX_FILE_BYTES,
+            super::MAX_TRIANGLES
+        )));
+    }
     let bytes = std::fs::read(path).map_err(|e| Error::io(&shown, e))?;
     let format = Format::from_extension(path)
         .or_else(|| Format::sniff(&bytes))

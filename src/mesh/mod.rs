@@ -30,6 +30,21 @@ pub struct TriMesh {
 /// Default weld tolerance, relative to the bounding-box diagonal.
 pub const DEFAULT_WELD_TOLERANCE: f64 = 1e-9;
 
+/// Most triangles an input may have (documented limit, docs/errors.md): above it a
+/// mesh is refused with LIMIT_EXCEEDED right after reading, before any check. The
+/// pipeline's own work is bounded by its samples and cells, so this limit is about
+/// memory: 5 million triangles take about 0.4 GB in memory with their checks.
+pub const MAX_TRIANGLES: usize = 5_000_000;
+/// Largest mesh file read (1 GiB), checked before reading a byte.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+fn check_triangle_limit(n: usize, what: &str) -> Result<()> {
+    if n > MAX_TRIANGLES {
+        return Err(Error::LimitExceeded(format!("{what}: {n} triangles, more than the {MAX_TRIANGLES} an input may have; decimate it first")));
+    }
+    Ok(())
+}
+
 /// How a mesh is read.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct LoadOptions {
@@ -82,6 +97,7 @@ impl TriMesh {
     /// non-finite coordinates give `Error::InvalidMesh`. Other defects are left
     /// for [`TriMesh::check`].
     pub fn load(path: impl AsRef<Path>, opts: &LoadOptions) -> Result<TriMesh> {
+        // (limits: MAX_FILE_BYTES before reading, MAX_TRIANGLES after parsing)
         Self::load_with_stats(path, opts).map(|(m, _)| m)
     }
 
@@ -91,6 +107,7 @@ impl TriMesh {
         let shown = path.display().to_string();
         let (bytes, format) = io::read_file(path)?;
         let soup = io::parse(&bytes, format, &shown)?;
+        check_triangle_limit(soup.triangles.len(), &shown)?;
         let mut stats = LoadStats {
             format: Some(match format {
                 Format::Obj => "obj",
@@ -123,6 +140,7 @@ impl TriMesh {
         if tri.len() % 3 != 0 {
             return Err(Error::InvalidArgument(format!("triangle array length {} is not a multiple of 3", tri.len())));
         }
+        check_triangle_limit(tri.len() / 3, "the triangle array")?;
         let nv = xyz.len() / 3;
         if nv > u32::MAX as usize {
             return Err(Error::LimitExceeded(format!("{nv} vertices: at most 2^32 - 1 are supported")));
