@@ -113,3 +113,35 @@ fn run_refuses_a_genus_inconsistent_context_before_diffusion() {
     assert!(err.contains("genus") && err.contains('1') && err.contains('0'), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `sddpm batch`: every mesh of a folder, in parallel, with a summary; a bad file is
+/// a row with its status, not the end of the batch.
+#[test]
+fn batch_meshes_a_folder_with_a_summary() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("sddpm-cli-batch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let inp = dir.join("in");
+    std::fs::create_dir_all(&inp).unwrap();
+    std::fs::copy(root.join("tests/data/meshes/cgal_hole.off"), inp.join("hole.off")).unwrap();
+    std::fs::copy(root.join("tests/data/meshes/cinolib_torus.obj"), inp.join("torus.obj")).unwrap();
+    std::fs::copy(root.join("tests/data/meshes/bad/cgal_mech-holes-shark.off"), inp.join("open.off")).unwrap();
+    std::fs::write(inp.join("notes.txt"), "not a mesh").unwrap();
+    let out = dir.join("out");
+    let (code, stdout, err) = sddpm(&["batch", inp.to_str().unwrap(), "-o", out.to_str().unwrap(), "--steps", "10", "--level", "1", "--no-spline", "--json", "-q"]);
+    assert_eq!(code, 2, "one file is bad: {err}");
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(v["files"], 3);
+    assert_eq!(v["ok"], 2);
+    let runs = v["runs"].as_array().unwrap();
+    let open = runs.iter().find(|r| r["folder"] == "open").unwrap();
+    assert_eq!(open["status"], "INVALID_MESH");
+    assert!(open["error"].as_str().unwrap().contains("boundary edges"));
+    for name in ["hole", "torus"] {
+        assert!(out.join(name).join("report.json").is_file(), "{name}");
+        assert!(out.join(name).join("hex.vtu").is_file(), "{name}");
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("| hole | OK | 1 |") && md.contains("INVALID_MESH"), "{md}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

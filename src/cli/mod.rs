@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod batch;
 mod common;
 mod context;
 mod dataset;
@@ -35,6 +36,8 @@ pub enum Command {
     Polycube(polycube::PolycubeArgs),
     /// The main job: polycube, hex mesh, spline, exports and report.html.
     Run(run::RunArgs),
+    /// The main job on every mesh of a folder, files in parallel, with a summary table.
+    Batch(batch::BatchArgs),
     /// Measure a model on held-in synthetic inputs (developer command).
     #[command(name = "eval-model")]
     EvalModel(evalmodel::EvalArgs),
@@ -60,6 +63,7 @@ pub fn run() -> i32 {
         Command::Dataset(args) => dataset::run(&args).unwrap_or_else(fail),
         Command::Polycube(args) => polycube::run(&args).unwrap_or_else(fail),
         Command::Run(args) => run::run(&args).unwrap_or_else(fail),
+        Command::Batch(args) => batch::run(&args).unwrap_or_else(fail),
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
         Command::PlotLoss(args) => plotloss::run(&args).unwrap_or_else(fail),
