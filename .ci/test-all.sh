@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev)
+packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
