@@ -1,6 +1,10 @@
 // The C++ RAII layer (bindings/cpp/sddpm.hpp), used alone: no call to the C API here.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -116,4 +120,66 @@ TEST(CppApi, PolycubeProgressAndCancel) {
   // an exception in the callback cancels the call and reaches the caller
   struct Stop {};
   EXPECT_THROW(sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast(), [](double, const std::string&) -> bool { throw Stop{}; }), Stop);
+}
+
+// The whole pipeline through the C++ layer: mesh -> polycube -> hex mesh -> spline -> files.
+TEST(CppApi, WholePipeline) {
+  auto model = sddpm::Model::embedded();
+  auto m = sddpm::Mesh::load(mesh("cgal_hole.off"));
+  auto ctx = sddpm::Contexts::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0");
+  auto pc = sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast());
+  auto ho = sddpm::default_hex_options();
+  ho.level = 1;
+  auto hex = sddpm::HexMesh::build(pc, ho);
+  auto q = hex.quality();
+  EXPECT_EQ(q.elements, hex.element_count());
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.min_scaled_jacobian, 0.2);
+  EXPECT_LT(q.hausdorff_relative, 0.01);
+  EXPECT_EQ(q.level, 1);
+  auto sj = hex.scaled_jacobian();
+  ASSERT_EQ(sj.size(), hex.element_count());
+  EXPECT_DOUBLE_EQ(*std::min_element(sj.begin(), sj.end()), q.min_scaled_jacobian);
+  size_t total = 0;
+  for (auto c : hex.histogram()) total += c;
+  EXPECT_EQ(total, hex.element_count());
+  auto conn = hex.elements();
+  for (auto i : conn) ASSERT_LT(i, hex.node_count());
+  EXPECT_NE(hex.report_json().find("\"min_scaled_jacobian\""), std::string::npos);
+
+  auto sp = sddpm::Spline::build(hex);
+  EXPECT_EQ(sp.element_count(), hex.element_count());
+  EXPECT_GT(sp.basis_count(), 0u);
+  // partition of unity: every Bernstein column of an element's operator sums to 1
+  auto x = sp.extraction(0);
+  ASSERT_FALSE(x.basis.empty());
+  for (int b = 0; b < 64; ++b) {
+    double s = 0;
+    for (size_t r = 0; r < x.basis.size(); ++r) s += x.op[r * 64 + b];
+    EXPECT_NEAR(s, 1.0, 1e-12) << "column " << b;
+  }
+  auto [p, j] = sp.evaluate(0, 0.5, 0.5, 0.5);
+  double det = j[0] * (j[4] * j[8] - j[5] * j[7]) - j[1] * (j[3] * j[8] - j[5] * j[6]) + j[2] * (j[3] * j[7] - j[4] * j[6]);
+  EXPECT_GT(det, 0.0);
+  EXPECT_THROW(sp.evaluate(0, 1.5, 0.5, 0.5), sddpm::Error);
+  EXPECT_THROW(sp.extraction(sp.element_count()), sddpm::Error);
+  auto dir = std::filesystem::temp_directory_path() / ("sddpm-cpp-api-" + std::to_string(::getpid()));
+  sp.write(dir.string());
+  hex.write((dir / "hex.vtu").string(), SDDPM_HEX_FORMAT_VTU);
+  for (auto f : {"spline.bext", "model.k", "hex.vtu"}) EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  std::filesystem::remove_all(dir);
+
+  // a hex mesh from arrays: the unit cube
+  std::vector<double> xyz = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1};
+  std::vector<uint32_t> cube = {0, 1, 2, 3, 4, 5, 6, 7};
+  auto one = sddpm::HexMesh::from_arrays(xyz, cube);
+  EXPECT_DOUBLE_EQ(one.quality().min_scaled_jacobian, 1.0);
+  std::vector<uint32_t> bad = {0, 1, 2, 3, 4, 5, 6, 9};
+  try {
+    sddpm::HexMesh::from_arrays(xyz, bad);
+    FAIL() << "out-of-range node accepted";
+  } catch (const sddpm::Error& e) {
+    EXPECT_EQ(e.status(), SDDPM_STATUS_INVALID_ARGUMENT);
+    EXPECT_NE(e.message().find("element 0"), std::string::npos) << e.message();
+  }
 }

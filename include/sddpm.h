@@ -87,11 +87,24 @@ typedef uint8_t Primitive;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
-// A rotation as a signed permutation: new axis `a` = sign[a] * old axis perm[a].
-typedef struct AxisRotation AxisRotation;
+// File formats of sddpm_hex_mesh_write.
+typedef enum sddpm_hex_format {
+  // VTK XML unstructured grid (.vtu) with the cell data "scaled_jacobian".
+  SDDPM_HEX_FORMAT_VTU = 0,
+  // Legacy VTK (.vtk), same content.
+  SDDPM_HEX_FORMAT_VTK_LEGACY = 1,
+  // Medit (.mesh).
+  SDDPM_HEX_FORMAT_MEDIT = 2,
+  // LS-DYNA keyword (*NODE, *ELEMENT_SOLID).
+  SDDPM_HEX_FORMAT_LSDYNA = 3,
+} sddpm_hex_format;
 
 // An opaque stack of contexts (release with sddpm_context_free).
 typedef struct sddpm_context sddpm_context;
+
+// An opaque all-hex mesh with its quality; not thread-safe to free while in use,
+// read-only calls may be made from several threads.
+typedef struct sddpm_hex_mesh sddpm_hex_mesh;
 
 // An opaque mesh handle (create with sddpm_mesh_load or
 // sddpm_mesh_new_from_arrays, release with sddpm_mesh_free).
@@ -103,6 +116,9 @@ typedef struct sddpm_model sddpm_model;
 
 // The result of polycube generation (release with sddpm_polycube_free).
 typedef struct sddpm_polycube sddpm_polycube;
+
+// An opaque volumetric spline (read-only calls may come from several threads).
+typedef struct sddpm_spline sddpm_spline;
 
 // Partial constraints: counts per family (-1 = free), optional exact counts per
 // label (index = label 0..10, -1 = free; entry 0 is ignored), the cells that may be
@@ -116,6 +132,58 @@ typedef struct sddpm_constraints {
   uint16_t required_mask;
   int64_t genus;
 } sddpm_constraints;
+
+// Options of the hex stage; fill with sddpm_hex_options_default, then change fields.
+typedef struct sddpm_hex_options {
+  // Fixed octree level, or -1 to choose it by the stopping rule (default -1).
+  int32_t level;
+  // Smallest and largest level the stopping rule may choose (defaults 2 and 4).
+  uint32_t min_level;
+  uint32_t max_level;
+  // Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
+  double threshold;
+  // Most elements before pillowing (default 200000).
+  size_t max_elements;
+  // Dihedral angle in degrees above which an input edge is a feature (default 40).
+  double feature_angle;
+  // One pillow layer (default true).
+  bool pillow;
+  // Smoothing passes (default 20) and Jacobian-optimisation passes (default 30).
+  uint32_t smooth_iterations;
+  uint32_t optimise_passes;
+  // Optimisation works on elements below this scaled Jacobian (default 0.8).
+  double optimise_target;
+  // Verified candidates meshed; the best mesh is kept (default 2).
+  uint32_t hex_candidates;
+  // Mesh the best-fitting diffused candidate when none passed verification (default true).
+  bool accept_unverified;
+} sddpm_hex_options;
+
+// Progress callback for long calls: `fraction` in [0, 1], `stage` a short
+// NUL-terminated name valid during the call, `user_data` as given by the
+// caller. Return nonzero to cancel (the call then returns SDDPM_STATUS_CANCELLED).
+typedef int (*sddpm_progress_cb)(double fraction, const char *stage, void *user_data);
+
+// Quality summary of a hex mesh.
+typedef struct sddpm_hex_quality {
+  size_t elements;
+  size_t nodes;
+  // Verdict hex scaled Jacobian: minimum, mean, maximum over the elements.
+  double min_scaled_jacobian;
+  double mean_scaled_jacobian;
+  double max_scaled_jacobian;
+  // Elements with scaled Jacobian <= 0.
+  size_t inverted;
+  // Two-sided Hausdorff distance to the input / bounding-box diagonal (NaN for a mesh from arrays).
+  double hausdorff_relative;
+  // Octree level (-1 for a mesh from arrays).
+  int32_t level;
+  // Volume of the hex mesh and of the input surface (NaN when unknown).
+  double volume;
+  double input_volume;
+  // False when the polycube it was built from did not pass verification.
+  bool verified_polycube;
+} sddpm_hex_quality;
 
 // How a mesh is read; fill with sddpm_load_options_default, then change fields.
 typedef struct sddpm_load_options {
@@ -188,11 +256,6 @@ typedef struct sddpm_polycube_options {
   uint32_t auto_resolution;
 } sddpm_polycube_options;
 
-// Progress callback for long calls: `fraction` in [0, 1], `stage` a short
-// NUL-terminated name valid during the call, `user_data` as given by the
-// caller. Return nonzero to cancel (the call then returns SDDPM_STATUS_CANCELLED).
-typedef int (*sddpm_progress_cb)(double fraction, const char *stage, void *user_data);
-
 // What the verification measured for one candidate.
 typedef struct sddpm_candidate_report {
   int32_t labels[12];
@@ -208,6 +271,23 @@ typedef struct sddpm_candidate_report {
   double score;
   bool chosen;
 } sddpm_candidate_report;
+
+// Options of the spline stage; fill with sddpm_spline_options_default.
+typedef struct sddpm_spline_options {
+  // Boundary edges sharper than this dihedral angle (degrees) are sharp features
+  // (default 60); negative turns automatic detection off.
+  double sharp_angle_deg;
+  // C0 Bernstein functions on the two layers next to the boundary (default false).
+  bool boundary_enrichment;
+  // Control points chosen so the spline interpolates the control-mesh vertices (default false).
+  bool interpolate_vertices;
+  // Replace elements with a non-positive Jacobian by their trilinear map (default true).
+  bool repair_jacobian;
+  // Fit the boundary to the surface (default true; needs a surface).
+  bool fit;
+  // Write sparse BEXT operator rows (default false: dense, as Hex2Spline).
+  bool sparse_bext;
+} sddpm_spline_options;
 
 #ifdef __cplusplus
 extern "C" {
@@ -331,6 +411,104 @@ sddpm_status sddpm_context_validity(const struct sddpm_context *c,
 // # Safety
 // `c` a valid handle; `path` a NUL-terminated path.
 sddpm_status sddpm_context_write_obj(const struct sddpm_context *c, size_t index, const char *path);
+
+// Fill `out` with the default hex options.
+//
+// # Safety
+// `out` writable.
+sddpm_status sddpm_hex_options_default(struct sddpm_hex_options *out);
+
+// Build the all-hex mesh of a polycube result: the best of its verified candidates
+// (up to `hex_candidates`, best score first; fewest inverted elements, then highest
+// minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
+// the best-fitting diffused one when `accept_unverified` (the quality reports
+// `verified_polycube` false), else the polycube's VERIFICATION_FAILED.
+//
+// # Safety
+// `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a
+// valid callback; `out` writable.
+sddpm_status sddpm_hex_mesh_build(const struct sddpm_polycube *polycube,
+                                  const struct sddpm_hex_options *options,
+                                  sddpm_progress_cb progress,
+                                  void *user_data,
+                                  struct sddpm_hex_mesh **out);
+
+// A hex mesh from the caller's arrays: `xyz` 3 doubles per node (`n_nodes`), `conn`
+// 8 node indices per element (`n_elements`, VTK_HEXAHEDRON order, 0-based). An index
+// out of range or a non-finite coordinate is refused naming the element / node.
+//
+// # Safety
+// `xyz` 3 * n_nodes readable doubles; `conn` 8 * n_elements readable ints; `out` writable.
+sddpm_status sddpm_hex_mesh_new_from_arrays(const double *xyz,
+                                            size_t n_nodes,
+                                            const uint32_t *conn,
+                                            size_t n_elements,
+                                            struct sddpm_hex_mesh **out);
+
+// Release a hex mesh (NULL is a no-op).
+//
+// # Safety
+// `h` NULL or a handle from sddpm_hex_mesh_build / _new_from_arrays, not used afterwards.
+void sddpm_hex_mesh_free(struct sddpm_hex_mesh *h);
+
+// Node and element counts.
+//
+// # Safety
+// `h` a valid handle; `nodes`, `elements` writable.
+sddpm_status sddpm_hex_mesh_counts(const struct sddpm_hex_mesh *h, size_t *nodes, size_t *elements);
+
+// Copy the node coordinates (3 doubles per node, user coordinates); `capacity` in doubles.
+//
+// # Safety
+// `h` a valid handle; `xyz` `capacity` writable doubles.
+sddpm_status sddpm_hex_mesh_copy_nodes(const struct sddpm_hex_mesh *h,
+                                       double *xyz,
+                                       size_t capacity);
+
+// Copy the connectivity (8 node indices per element, VTK_HEXAHEDRON order, 0-based);
+// `capacity` in indices.
+//
+// # Safety
+// `h` a valid handle; `conn` `capacity` writable ints.
+sddpm_status sddpm_hex_mesh_copy_elements(const struct sddpm_hex_mesh *h,
+                                          uint32_t *conn,
+                                          size_t capacity);
+
+// The per-element Verdict scaled Jacobian; `capacity` in doubles.
+//
+// # Safety
+// `h` a valid handle; `values` `capacity` writable doubles.
+sddpm_status sddpm_hex_mesh_copy_scaled_jacobian(const struct sddpm_hex_mesh *h,
+                                                 double *values,
+                                                 size_t capacity);
+
+// Histogram of the scaled Jacobian: `bins` equal bins over [-1, 1] into `counts`.
+//
+// # Safety
+// `h` a valid handle; `counts` `bins` writable values.
+sddpm_status sddpm_hex_mesh_histogram(const struct sddpm_hex_mesh *h, size_t *counts, size_t bins);
+
+// The quality summary.
+//
+// # Safety
+// `h` a valid handle; `out` writable.
+sddpm_status sddpm_hex_mesh_quality(const struct sddpm_hex_mesh *h, struct sddpm_hex_quality *out);
+
+// The hex stage's report (report.json's "hex" object) as JSON; buffer convention of
+// sddpm_polycube_report_json.
+//
+// # Safety
+// `h` a valid handle; `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+sddpm_status sddpm_hex_mesh_report_json(const struct sddpm_hex_mesh *h,
+                                        char *buf,
+                                        size_t len,
+                                        size_t *needed);
+
+// Write the mesh (user coordinates) to `path` in `format` (an SddpmHexFormat value).
+//
+// # Safety
+// `h` a valid handle; `path` NUL-terminated.
+sddpm_status sddpm_hex_mesh_write(const struct sddpm_hex_mesh *h, const char *path, int32_t format);
 
 // Fill `out` with the default load options.
 //
@@ -530,6 +708,86 @@ sddpm_status sddpm_polycube_copy_points(const struct sddpm_polycube *p,
                                         double *points,
                                         double *inputs,
                                         size_t capacity);
+
+// Fill `out` with the default spline options.
+//
+// # Safety
+// `out` writable.
+sddpm_status sddpm_spline_options_default(struct sddpm_spline_options *out);
+
+// Build the spline of a hex mesh. The boundary is fitted to `surface` when given,
+// else to the surface the hex mesh was built for (none for a mesh from arrays).
+//
+// # Safety
+// `hex` a valid handle; `surface`, `options` NULL or valid; `progress` NULL or a valid
+// callback; `out` writable.
+sddpm_status sddpm_spline_build(const struct sddpm_hex_mesh *hex,
+                                const struct sddpm_mesh *surface,
+                                const struct sddpm_spline_options *options,
+                                sddpm_progress_cb progress,
+                                void *user_data,
+                                struct sddpm_spline **out);
+
+// Release a spline (NULL is a no-op).
+//
+// # Safety
+// `s` NULL or a handle from sddpm_spline_build, not used afterwards.
+void sddpm_spline_free(struct sddpm_spline *s);
+
+// Element (Bézier cell) and basis-function counts.
+//
+// # Safety
+// `s` a valid handle; `elements`, `basis_functions` writable.
+sddpm_status sddpm_spline_counts(const struct sddpm_spline *s,
+                                 size_t *elements,
+                                 size_t *basis_functions);
+
+// Bézier extraction of `element`: `n_basis` receives how many global basis functions
+// are non-zero on it; `basis_ids` (capacity >= n_basis) their ids and `operator`
+// (capacity >= 64 * n_basis doubles) the dense extraction rows, row r holding the
+// coefficients of basis_ids[r] on the 64 Bernstein polynomials (index i + 4j + 16k,
+// u fastest). Call with NULL buffers and capacity 0 to ask for `n_basis` only
+// (returns BUFFER_TOO_SMALL then, with `n_basis` written).
+//
+// # Safety
+// `s` a valid handle; `basis_ids` NULL or `capacity` writable ints; `operator` NULL or
+// 64 * `capacity` writable doubles; `n_basis` writable.
+sddpm_status sddpm_spline_element_extraction(const struct sddpm_spline *s,
+                                             size_t element,
+                                             uint32_t *basis_ids,
+                                             double *operator_,
+                                             size_t capacity,
+                                             size_t *n_basis);
+
+// The spline map at parameters (u, v, w) in [0, 1]^3 of `element`: `xyz` (3 doubles)
+// and, if `jacobian` is not NULL, its Jacobian (9 doubles, row-major d x_i / d u_j).
+//
+// # Safety
+// `s` a valid handle; `xyz` 3 writable doubles; `jacobian` NULL or 9 writable doubles.
+sddpm_status sddpm_spline_evaluate(const struct sddpm_spline *s,
+                                   size_t element,
+                                   double u,
+                                   double v,
+                                   double w,
+                                   double *xyz,
+                                   double *jacobian);
+
+// Write spline.bext, model.k (the LS-DYNA deck including it), spline.vtk and
+// spline_control.vtk into the folder `dir` (created if missing).
+//
+// # Safety
+// `s` a valid handle; `dir` NUL-terminated.
+sddpm_status sddpm_spline_write(const struct sddpm_spline *s, const char *dir);
+
+// The spline's report (report.json's "spline" object without file names) as JSON;
+// buffer convention of sddpm_polycube_report_json.
+//
+// # Safety
+// `s` a valid handle; `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+sddpm_status sddpm_spline_report_json(const struct sddpm_spline *s,
+                                      char *buf,
+                                      size_t len,
+                                      size_t *needed);
 
 #ifdef __cplusplus
 }  // extern "C"

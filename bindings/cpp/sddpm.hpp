@@ -1,6 +1,6 @@
 // libsddpm C++17 API: a header-only RAII layer over the C API of sddpm.h.
 //
-// - Move-only owners (Mesh, Contexts, Model, Polycube, ...) free their handle in the
+// - Move-only owners (Mesh, Contexts, Model, Polycube, HexMesh, Spline) free their handle in the
 //   destructor; `get()` gives the C handle for calls this header does not wrap.
 // - Every failing C call throws sddpm::Error, carrying the status and the message of
 //   the library (the per-thread last error).
@@ -358,6 +358,146 @@ class Polycube {
  private:
   explicit Polycube(sddpm_polycube* p) : h_(p) {}
   detail::Owner<sddpm_polycube, sddpm_polycube_free> h_;
+};
+
+// ------------------------------------------------------------------ hex mesh
+
+inline sddpm_hex_options default_hex_options() {
+  sddpm_hex_options o{};
+  detail::check(sddpm_hex_options_default(&o));
+  return o;
+}
+
+/// An all-hex mesh (VTK_HEXAHEDRON node order) with its quality.
+class HexMesh {
+ public:
+  /// Build from a polycube result (its best verified candidate(s)).
+  static HexMesh build(const Polycube& pc, const sddpm_hex_options& opts = default_hex_options(), ProgressFn progress = {}) {
+    detail::Progress p{std::move(progress), nullptr};
+    sddpm_hex_mesh* out = nullptr;
+    sddpm_status s = sddpm_hex_mesh_build(pc.get(), &opts, p.cb(), p.data(), &out);
+    HexMesh h(out);
+    p.finish(s);
+    return h;
+  }
+  /// From the caller's arrays: 3 doubles per node, 8 indices per element.
+  static HexMesh from_arrays(Span<double> xyz, Span<uint32_t> conn) {
+    if (xyz.size % 3 != 0 || conn.size % 8 != 0) throw Error(SDDPM_STATUS_INVALID_ARGUMENT, "xyz needs 3 values per node and conn 8 per element");
+    sddpm_hex_mesh* out = nullptr;
+    detail::check(sddpm_hex_mesh_new_from_arrays(xyz.data, xyz.size / 3, conn.data, conn.size / 8, &out));
+    return HexMesh(out);
+  }
+  size_t node_count() const { return counts().first; }
+  size_t element_count() const { return counts().second; }
+  std::vector<double> nodes() const {
+    std::vector<double> v(3 * node_count());
+    detail::check(sddpm_hex_mesh_copy_nodes(h_.get(), v.data(), v.size()));
+    return v;
+  }
+  std::vector<uint32_t> elements() const {
+    std::vector<uint32_t> v(8 * element_count());
+    detail::check(sddpm_hex_mesh_copy_elements(h_.get(), v.data(), v.size()));
+    return v;
+  }
+  std::vector<double> scaled_jacobian() const {
+    std::vector<double> v(element_count());
+    detail::check(sddpm_hex_mesh_copy_scaled_jacobian(h_.get(), v.data(), v.size()));
+    return v;
+  }
+  std::vector<size_t> histogram(size_t bins = 20) const {
+    std::vector<size_t> v(bins);
+    detail::check(sddpm_hex_mesh_histogram(h_.get(), v.data(), bins));
+    return v;
+  }
+  sddpm_hex_quality quality() const {
+    sddpm_hex_quality q{};
+    detail::check(sddpm_hex_mesh_quality(h_.get(), &q));
+    return q;
+  }
+  std::string report_json() const {
+    size_t need = 0;
+    sddpm_hex_mesh_report_json(h_.get(), nullptr, 0, &need);
+    std::string s(need, '\0');
+    detail::check(sddpm_hex_mesh_report_json(h_.get(), &s[0], s.size(), &need));
+    s.resize(need > 0 ? need - 1 : 0);
+    return s;
+  }
+  void write(const std::string& path, sddpm_hex_format format) const { detail::check(sddpm_hex_mesh_write(h_.get(), path.c_str(), format)); }
+  const sddpm_hex_mesh* get() const noexcept { return h_.get(); }
+
+ private:
+  explicit HexMesh(sddpm_hex_mesh* h) : h_(h) {}
+  std::pair<size_t, size_t> counts() const {
+    size_t n = 0, e = 0;
+    detail::check(sddpm_hex_mesh_counts(h_.get(), &n, &e));
+    return {n, e};
+  }
+  detail::Owner<sddpm_hex_mesh, sddpm_hex_mesh_free> h_;
+};
+
+// ------------------------------------------------------------------ spline
+
+inline sddpm_spline_options default_spline_options() {
+  sddpm_spline_options o{};
+  detail::check(sddpm_spline_options_default(&o));
+  return o;
+}
+
+/// One element's Bézier extraction: basis ids and rows of 64 Bernstein coefficients.
+struct Extraction {
+  std::vector<uint32_t> basis;
+  std::vector<double> op;  // basis.size() x 64, row-major
+};
+
+/// The TH-spline3D volume with its Bézier extraction.
+class Spline {
+ public:
+  /// Fitted to `surface`, or to the surface the hex mesh was built for when null.
+  static Spline build(const HexMesh& hex, const Mesh* surface = nullptr, const sddpm_spline_options& opts = default_spline_options(),
+                      ProgressFn progress = {}) {
+    detail::Progress p{std::move(progress), nullptr};
+    sddpm_spline* out = nullptr;
+    sddpm_status s = sddpm_spline_build(hex.get(), surface ? surface->get() : nullptr, &opts, p.cb(), p.data(), &out);
+    Spline sp(out);
+    p.finish(s);
+    return sp;
+  }
+  size_t element_count() const { return counts().first; }
+  size_t basis_count() const { return counts().second; }
+  Extraction extraction(size_t element) const {
+    size_t n = 0;
+    sddpm_spline_element_extraction(h_.get(), element, nullptr, nullptr, 0, &n);
+    Extraction x{std::vector<uint32_t>(n), std::vector<double>(64 * n)};
+    detail::check(sddpm_spline_element_extraction(h_.get(), element, x.basis.data(), x.op.data(), n, &n));
+    return x;
+  }
+  /// The map at (u, v, w) in [0, 1]^3 of `element`, and its Jacobian (row-major).
+  std::pair<std::array<double, 3>, std::array<double, 9>> evaluate(size_t element, double u, double v, double w) const {
+    std::array<double, 3> x{};
+    std::array<double, 9> j{};
+    detail::check(sddpm_spline_evaluate(h_.get(), element, u, v, w, x.data(), j.data()));
+    return {x, j};
+  }
+  /// spline.bext, model.k, spline.vtk, spline_control.vtk into `dir`.
+  void write(const std::string& dir) const { detail::check(sddpm_spline_write(h_.get(), dir.c_str())); }
+  std::string report_json() const {
+    size_t need = 0;
+    sddpm_spline_report_json(h_.get(), nullptr, 0, &need);
+    std::string s(need, '\0');
+    detail::check(sddpm_spline_report_json(h_.get(), &s[0], s.size(), &need));
+    s.resize(need > 0 ? need - 1 : 0);
+    return s;
+  }
+  const sddpm_spline* get() const noexcept { return h_.get(); }
+
+ private:
+  explicit Spline(sddpm_spline* s) : h_(s) {}
+  std::pair<size_t, size_t> counts() const {
+    size_t e = 0, b = 0;
+    detail::check(sddpm_spline_counts(h_.get(), &e, &b));
+    return {e, b};
+  }
+  detail::Owner<sddpm_spline, sddpm_spline_free> h_;
 };
 
 }  // namespace sddpm

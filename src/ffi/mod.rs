@@ -14,11 +14,15 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::sync::OnceLock;
 
 mod context;
+mod hex;
 mod mesh;
 mod model;
+mod spline;
 pub use context::*;
+pub use hex::*;
 pub use mesh::*;
 pub use model::*;
+pub use spline::*;
 
 /// Version of the C ABI: bumped whenever a declaration in include/sddpm.h changes incompatibly.
 pub const ABI_VERSION: u32 = 1;
@@ -259,4 +263,39 @@ impl Progress for CProgress {
             }
         }
     }
+}
+
+/// A NUL-terminated UTF-8 path argument.
+pub(crate) unsafe fn c_path(p: *const c_char, name: &str) -> Result<std::path::PathBuf> {
+    non_null(p, name)?;
+    let s = CStr::from_ptr(p).to_str().map_err(|_| Error::InvalidArgument(format!("{name} is not UTF-8")))?;
+    if s.is_empty() {
+        return Err(Error::InvalidArgument(format!("{name} is empty")));
+    }
+    Ok(std::path::PathBuf::from(s))
+}
+
+/// Copy `s` NUL-terminated into (`buf`, `len`); `needed` (may be NULL) receives its size
+/// with the NUL. BUFFER_TOO_SMALL (buffer untouched) when it does not fit or `buf` is NULL.
+pub(crate) unsafe fn copy_string(s: &str, buf: *mut c_char, len: usize, needed: *mut usize, what: &str) -> Result<()> {
+    if !needed.is_null() {
+        *needed = s.len() + 1;
+    }
+    if buf.is_null() || len < s.len() + 1 {
+        return Err(Error::BufferTooSmall(format!("{what} needs {} bytes, the buffer holds {len}", s.len() + 1)));
+    }
+    std::ptr::copy_nonoverlapping(s.as_ptr() as *const c_char, buf, s.len());
+    *buf.add(s.len()) = 0;
+    Ok(())
+}
+
+/// Copy `src` into the caller's buffer of `capacity` elements; BUFFER_TOO_SMALL (buffer
+/// untouched) when it is shorter than `src`.
+pub(crate) unsafe fn copy_slice<T: Copy>(src: &[T], dst: *mut T, capacity: usize, what: &str) -> Result<()> {
+    non_null(dst, what)?;
+    if capacity < src.len() {
+        return Err(Error::BufferTooSmall(format!("{what}: {} values needed, the buffer holds {capacity}", src.len())));
+    }
+    std::ptr::copy_nonoverlapping(src.as_ptr(), dst, src.len());
+    Ok(())
 }

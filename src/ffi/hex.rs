@@ -1,0 +1,400 @@
+//! Hex mesh handle: built from a polycube handle (or from the caller's arrays), its
+//! counts, nodes, elements, quality, export to every format, free.
+
+use super::model::SddpmPolycube;
+use super::{c_path, copy_slice, copy_string, ffi_boundary, non_null, CProgress, SddpmProgressCb};
+use crate::error::{Error, Result, Status};
+use crate::hex::quality::{element_qualities, summarize};
+use crate::hex::{HexMesh, HexOptions, HexResult};
+use crate::mesh::TriMesh;
+use crate::pipeline::{build_hex_for_polycube, fallback_candidate, ranked_verified, RunOptions};
+use std::ffi::{c_char, c_void};
+
+/// An opaque all-hex mesh with its quality; not thread-safe to free while in use,
+/// read-only calls may be made from several threads.
+pub struct SddpmHexMesh {
+    pub(crate) mesh: HexMesh,
+    pub(crate) scaled_jacobian: Vec<f64>,
+    /// The full result when built by the pipeline (None for a mesh from arrays).
+    pub(crate) result: Option<HexResult>,
+    /// The surface the mesh was built for (the spline's default fitting target).
+    pub(crate) surface: Option<TriMesh>,
+    pub(crate) verified: bool,
+}
+
+/// Options of the hex stage; fill with sddpm_hex_options_default, then change fields.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct SddpmHexOptions {
+    /// Fixed octree level, or -1 to choose it by the stopping rule (default -1).
+    pub level: i32,
+    /// Smallest and largest level the stopping rule may choose (defaults 2 and 4).
+    pub min_level: u32,
+    pub max_level: u32,
+    /// Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
+    pub threshold: f64,
+    /// Most elements before pillowing (default 200000).
+    pub max_elements: usize,
+    /// Dihedral angle in degrees above which an input edge is a feature (default 40).
+    pub feature_angle: f64,
+    /// One pillow layer (default true).
+    pub pillow: bool,
+    /// Smoothing passes (default 20) and Jacobian-optimisation passes (default 30).
+    pub smooth_iterations: u32,
+    pub optimise_passes: u32,
+    /// Optimisation works on elements below this scaled Jacobian (default 0.8).
+    pub optimise_target: f64,
+    /// Verified candidates meshed; the best mesh is kept (default 2).
+    pub hex_candidates: u32,
+    /// Mesh the best-fitting diffused candidate when none passed verification (default true).
+    pub accept_unverified: bool,
+}
+
+/// Quality summary of a hex mesh.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SddpmHexQuality {
+    pub elements: usize,
+    pub nodes: usize,
+    /// Verdict hex scaled Jacobian: minimum, mean, maximum over the elements.
+    pub min_scaled_jacobian: f64,
+    pub mean_scaled_jacobian: f64,
+    pub max_scaled_jacobian: f64,
+    /// Elements with scaled Jacobian <= 0.
+    pub inverted: usize,
+    /// Two-sided Hausdorff distance to the input / bounding-box diagonal (NaN for a mesh from arrays).
+    pub hausdorff_relative: f64,
+    /// Octree level (-1 for a mesh from arrays).
+    pub level: i32,
+    /// Volume of the hex mesh and of the input surface (NaN when unknown).
+    pub volume: f64,
+    pub input_volume: f64,
+    /// False when the polycube it was built from did not pass verification.
+    pub verified_polycube: bool,
+}
+
+/// File formats of sddpm_hex_mesh_write.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SddpmHexFormat {
+    /// VTK XML unstructured grid (.vtu) with the cell data "scaled_jacobian".
+    Vtu = 0,
+    /// Legacy VTK (.vtk), same content.
+    VtkLegacy = 1,
+    /// Medit (.mesh).
+    Medit = 2,
+    /// LS-DYNA keyword (*NODE, *ELEMENT_SOLID).
+    Lsdyna = 3,
+}
+
+unsafe fn hex_ref<'a>(h: *const SddpmHexMesh) -> Result<&'a SddpmHexMesh> {
+    non_null(h, "hex mesh")?;
+    Ok(&*h)
+}
+
+/// Fill `out` with the default hex options.
+///
+/// # Safety
+/// `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) -> Status {
+    ffi_boundary! {
+        non_null(out, "out")?;
+        let h = HexOptions::default();
+        let r = RunOptions::default();
+        *out = SddpmHexOptions {
+            level: -1,
+            min_level: h.min_level,
+            max_level: h.max_level,
+            threshold: h.threshold,
+            max_elements: h.max_elements,
+            feature_angle: h.feature_angle,
+            pillow: h.pillow,
+            smooth_iterations: h.smooth_iterations as u32,
+            optimise_passes: h.optimise_passes as u32,
+            optimise_target: h.optimise_target,
+            hex_candidates: r.hex_candidates as u32,
+            accept_unverified: r.accept_unverified,
+        };
+        Ok(())
+    }
+}
+
+fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)> {
+    let mut h = HexOptions::default();
+    let r = RunOptions::default();
+    let Some(o) = o else { return Ok((h, r.hex_candidates, r.accept_unverified)) };
+    if o.level < -1 || o.level > 6 || o.max_level > 6 || o.min_level > o.max_level {
+        return Err(Error::InvalidArgument(format!(
+            "hex options: level {} / min_level {} / max_level {} (levels are 0..6, -1 = automatic, min <= max)",
+            o.level, o.min_level, o.max_level
+        )));
+    }
+    if !(o.threshold > 0.0 && o.threshold.is_finite()) || !(o.feature_angle.is_finite()) || !(o.optimise_target.is_finite()) {
+        return Err(Error::InvalidArgument("hex options: threshold must be positive and finite, angles and targets finite".into()));
+    }
+    h.level = (o.level >= 0).then_some(o.level as u32);
+    h.min_level = o.min_level;
+    h.max_level = o.max_level;
+    h.threshold = o.threshold;
+    h.max_elements = o.max_elements.max(1);
+    h.feature_angle = o.feature_angle;
+    h.pillow = o.pillow;
+    h.smooth_iterations = o.smooth_iterations as usize;
+    h.optimise_passes = o.optimise_passes as usize;
+    h.optimise_target = o.optimise_target;
+    Ok((h, (o.hex_candidates as usize).max(1), o.accept_unverified))
+}
+
+/// Build the all-hex mesh of a polycube result: the best of its verified candidates
+/// (up to `hex_candidates`, best score first; fewest inverted elements, then highest
+/// minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
+/// the best-fitting diffused one when `accept_unverified` (the quality reports
+/// `verified_polycube` false), else the polycube's VERIFICATION_FAILED.
+///
+/// # Safety
+/// `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a
+/// valid callback; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_build(
+    polycube: *const SddpmPolycube,
+    options: *const SddpmHexOptions,
+    progress: SddpmProgressCb,
+    user_data: *mut c_void,
+    out: *mut *mut SddpmHexMesh,
+) -> Status {
+    ffi_boundary! {
+        non_null(polycube, "polycube")?;
+        non_null(out, "out")?;
+        let pc = &*polycube;
+        let (mut hopts, n, accept) = hex_options(options.as_ref())?;
+        let (order, verified) = if pc.result.chosen.is_some() {
+            let mut o = ranked_verified(&pc.result);
+            o.truncate(n);
+            (o, true)
+        } else {
+            match fallback_candidate(&pc.result) {
+                Some(i) if accept => {
+                    hopts.use_correspondence = false;
+                    (vec![i], false)
+                }
+                _ => return Err(pc.result.accepted().err().unwrap_or_else(|| Error::VerificationFailed("no candidate".into()))),
+            }
+        };
+        let mut p = CProgress { callback: progress, user_data };
+        let (_, _, r) = build_hex_for_polycube(&pc.result, &order, &pc.mesh, &hopts, &mut p)?;
+        *out = Box::into_raw(Box::new(SddpmHexMesh {
+            mesh: r.mesh.clone(),
+            scaled_jacobian: r.scaled_jacobian.clone(),
+            result: Some(r),
+            surface: Some(pc.mesh.clone()),
+            verified,
+        }));
+        Ok(())
+    }
+}
+
+/// A hex mesh from the caller's arrays: `xyz` 3 doubles per node (`n_nodes`), `conn`
+/// 8 node indices per element (`n_elements`, VTK_HEXAHEDRON order, 0-based). An index
+/// out of range or a non-finite coordinate is refused naming the element / node.
+///
+/// # Safety
+/// `xyz` 3 * n_nodes readable doubles; `conn` 8 * n_elements readable ints; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_new_from_arrays(
+    xyz: *const f64,
+    n_nodes: usize,
+    conn: *const u32,
+    n_elements: usize,
+    out: *mut *mut SddpmHexMesh,
+) -> Status {
+    ffi_boundary! {
+        non_null(xyz, "xyz")?;
+        non_null(conn, "conn")?;
+        non_null(out, "out")?;
+        if n_elements == 0 {
+            return Err(Error::InvalidArgument("a hex mesh needs at least one element".into()));
+        }
+        let x = std::slice::from_raw_parts(xyz, 3 * n_nodes);
+        let c = std::slice::from_raw_parts(conn, 8 * n_elements);
+        let nodes: Vec<[f64; 3]> = x.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+        if let Some(i) = nodes.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+            return Err(Error::InvalidArgument(format!("node {i} has a non-finite coordinate")));
+        }
+        let mut elements = Vec::with_capacity(n_elements);
+        for (e, ch) in c.chunks_exact(8).enumerate() {
+            let el: [u32; 8] = std::array::from_fn(|k| ch[k]);
+            if let Some(&bad) = el.iter().find(|&&v| v as usize >= n_nodes) {
+                return Err(Error::InvalidArgument(format!("element {e} refers to node {bad} but there are {n_nodes} nodes")));
+            }
+            elements.push(el);
+        }
+        let mesh = HexMesh { nodes, elements };
+        let scaled_jacobian = element_qualities(&mesh);
+        *out = Box::into_raw(Box::new(SddpmHexMesh { mesh, scaled_jacobian, result: None, surface: None, verified: true }));
+        Ok(())
+    }
+}
+
+/// Release a hex mesh (NULL is a no-op).
+///
+/// # Safety
+/// `h` NULL or a handle from sddpm_hex_mesh_build / _new_from_arrays, not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_free(h: *mut SddpmHexMesh) {
+    ffi_boundary! {
+        if !h.is_null() {
+            drop(Box::from_raw(h));
+        }
+    }
+}
+
+/// Node and element counts.
+///
+/// # Safety
+/// `h` a valid handle; `nodes`, `elements` writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_counts(h: *const SddpmHexMesh, nodes: *mut usize, elements: *mut usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        non_null(nodes, "nodes")?;
+        non_null(elements, "elements")?;
+        *nodes = h.mesh.nodes.len();
+        *elements = h.mesh.elements.len();
+        Ok(())
+    }
+}
+
+/// Copy the node coordinates (3 doubles per node, user coordinates); `capacity` in doubles.
+///
+/// # Safety
+/// `h` a valid handle; `xyz` `capacity` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_copy_nodes(h: *const SddpmHexMesh, xyz: *mut f64, capacity: usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        let flat: Vec<f64> = h.mesh.nodes.iter().flatten().copied().collect();
+        copy_slice(&flat, xyz, capacity, "xyz")
+    }
+}
+
+/// Copy the connectivity (8 node indices per element, VTK_HEXAHEDRON order, 0-based);
+/// `capacity` in indices.
+///
+/// # Safety
+/// `h` a valid handle; `conn` `capacity` writable ints.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_copy_elements(h: *const SddpmHexMesh, conn: *mut u32, capacity: usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        let flat: Vec<u32> = h.mesh.elements.iter().flatten().copied().collect();
+        copy_slice(&flat, conn, capacity, "conn")
+    }
+}
+
+/// The per-element Verdict scaled Jacobian; `capacity` in doubles.
+///
+/// # Safety
+/// `h` a valid handle; `values` `capacity` writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_copy_scaled_jacobian(h: *const SddpmHexMesh, values: *mut f64, capacity: usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        copy_slice(&h.scaled_jacobian, values, capacity, "values")
+    }
+}
+
+/// Histogram of the scaled Jacobian: `bins` equal bins over [-1, 1] into `counts`.
+///
+/// # Safety
+/// `h` a valid handle; `counts` `bins` writable values.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_histogram(h: *const SddpmHexMesh, counts: *mut usize, bins: usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        non_null(counts, "counts")?;
+        if bins == 0 || bins > 100_000 {
+            return Err(Error::InvalidArgument(format!("bins must be 1..100000, got {bins}")));
+        }
+        let mut v = vec![0usize; bins];
+        for &q in &h.scaled_jacobian {
+            let q = if q.is_finite() { q.clamp(-1.0, 1.0) } else { -1.0 };
+            let b = (((q + 1.0) / 2.0) * bins as f64).floor() as usize;
+            v[b.min(bins - 1)] += 1;
+        }
+        std::ptr::copy_nonoverlapping(v.as_ptr(), counts, bins);
+        Ok(())
+    }
+}
+
+/// The quality summary.
+///
+/// # Safety
+/// `h` a valid handle; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_quality(h: *const SddpmHexMesh, out: *mut SddpmHexQuality) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        non_null(out, "out")?;
+        let q = summarize(&h.scaled_jacobian);
+        let (haus, level, vol, ivol) = match &h.result {
+            Some(r) => (r.hausdorff_relative, r.level as i32, r.volume, r.input_volume),
+            None => (f64::NAN, -1, crate::hex::topology::mesh_volume(&h.mesh), f64::NAN),
+        };
+        *out = SddpmHexQuality {
+            elements: q.elements,
+            nodes: h.mesh.nodes.len(),
+            min_scaled_jacobian: q.min,
+            mean_scaled_jacobian: q.mean,
+            max_scaled_jacobian: q.max,
+            inverted: q.inverted,
+            hausdorff_relative: haus,
+            level,
+            volume: vol,
+            input_volume: ivol,
+            verified_polycube: h.verified,
+        };
+        Ok(())
+    }
+}
+
+/// The hex stage's report (report.json's "hex" object) as JSON; buffer convention of
+/// sddpm_polycube_report_json.
+///
+/// # Safety
+/// `h` a valid handle; `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_report_json(h: *const SddpmHexMesh, buf: *mut c_char, len: usize, needed: *mut usize) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        let v = match &h.result {
+            Some(r) => crate::hex::report_json(r),
+            None => {
+                let q = summarize(&h.scaled_jacobian);
+                serde_json::json!({ "vertices": h.mesh.nodes.len(), "elements": h.mesh.elements.len(),
+                    "min_scaled_jacobian": q.min, "mean_scaled_jacobian": q.mean, "inverted": q.inverted })
+            }
+        };
+        copy_string(&v.to_string(), buf, len, needed, "the report")
+    }
+}
+
+/// Write the mesh (user coordinates) to `path` in `format` (an SddpmHexFormat value).
+///
+/// # Safety
+/// `h` a valid handle; `path` NUL-terminated.
+#[no_mangle]
+pub unsafe extern "C" fn sddpm_hex_mesh_write(h: *const SddpmHexMesh, path: *const c_char, format: i32) -> Status {
+    ffi_boundary! {
+        let h = hex_ref(h)?;
+        let p = c_path(path, "path")?;
+        let sj: &[f64] = &h.scaled_jacobian;
+        match format {
+            f if f == SddpmHexFormat::Vtu as i32 => crate::export::hexfmt::write_vtu(&p, &h.mesh, &[("scaled_jacobian", sj)]),
+            f if f == SddpmHexFormat::VtkLegacy as i32 => crate::export::vtk::write_vtk_legacy(&p, &h.mesh, "sddpm hex mesh", &[("scaled_jacobian", sj)]),
+            f if f == SddpmHexFormat::Medit as i32 => crate::export::hexfmt::write_medit(&p, &h.mesh),
+            f if f == SddpmHexFormat::Lsdyna as i32 => crate::export::hexfmt::write_lsdyna(&p, &h.mesh, "sddpm hex mesh"),
+            f => Err(Error::InvalidArgument(format!("format {f} is not an sddpm_hex_format (0 VTU, 1 legacy VTK, 2 Medit, 3 LS-DYNA)"))),
+        }
+    }
+}
