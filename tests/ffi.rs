@@ -162,3 +162,79 @@ fn progress_adapter_cancels_on_nonzero() {
     assert_eq!(e.status(), Status::Cancelled);
     assert_eq!(seen, vec![(0.25, "load".to_string()), (0.5, "check".to_string())]);
 }
+
+/// Hex and spline handles: NULL arguments, small buffers, out-of-range element and
+/// parameters, bad format, a cancel from the callback; out-parameters untouched on failure.
+#[test]
+fn hex_and_spline_handles_contract() {
+    unsafe extern "C" fn cancel(_f: f64, _s: *const std::ffi::c_char, _u: *mut std::ffi::c_void) -> std::ffi::c_int {
+        1
+    }
+    unsafe {
+        let mut h = null_mut();
+        assert_eq!(sddpm_hex_mesh_build(null(), null(), None, null_mut(), &mut h), Status::InvalidArgument);
+        assert!(last_message().contains("`polycube` is NULL"));
+        assert!(h.is_null());
+        let mut ho = std::mem::zeroed::<SddpmHexOptions>();
+        assert_eq!(sddpm_hex_options_default(&mut ho), Status::Ok);
+        assert_eq!(ho.level, -1);
+        // the unit cube from arrays, then one with a bad index
+        let xyz = [0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0., 0., 0., 1., 1., 0., 1., 1., 1., 1., 0., 1., 1.];
+        let bad = [0u32, 1, 2, 3, 4, 5, 6, 8];
+        assert_eq!(sddpm_hex_mesh_new_from_arrays(xyz.as_ptr(), 8, bad.as_ptr(), 1, &mut h), Status::InvalidArgument);
+        assert!(last_message().contains("element 0 refers to node 8"));
+        let conn = [0u32, 1, 2, 3, 4, 5, 6, 7];
+        assert_eq!(sddpm_hex_mesh_new_from_arrays(xyz.as_ptr(), 8, conn.as_ptr(), 1, &mut h), Status::Ok);
+        let mut q = std::mem::zeroed::<SddpmHexQuality>();
+        assert_eq!(sddpm_hex_mesh_quality(h, &mut q), Status::Ok);
+        assert_eq!((q.elements, q.nodes, q.inverted, q.level), (1, 8, 0, -1));
+        assert!((q.min_scaled_jacobian - 1.0).abs() < 1e-15 && (q.volume - 1.0).abs() < 1e-14);
+        let mut small = [0f64; 5];
+        assert_eq!(sddpm_hex_mesh_copy_nodes(h, small.as_mut_ptr(), small.len()), Status::BufferTooSmall);
+        assert!(last_message().contains("24 values needed"));
+        assert_eq!(small, [0.0; 5], "buffer touched on failure");
+        let mut counts = [0usize; 4];
+        assert_eq!(sddpm_hex_mesh_histogram(h, counts.as_mut_ptr(), 4), Status::Ok);
+        assert_eq!(counts, [0, 0, 0, 1]);
+        let dir = std::env::temp_dir().join(format!("sddpm-ffi-hex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = CString::new(dir.join("cube.k").to_str().unwrap()).unwrap();
+        assert_eq!(sddpm_hex_mesh_write(h, path.as_ptr(), 7), Status::InvalidArgument);
+        assert!(last_message().contains("format 7"));
+        assert_eq!(sddpm_hex_mesh_write(h, path.as_ptr(), SddpmHexFormat::Lsdyna as i32), Status::Ok);
+        assert!(std::fs::read_to_string(dir.join("cube.k")).unwrap().contains("*ELEMENT_SOLID"));
+        // spline of the cube: cancel, then build
+        let mut s = null_mut();
+        assert_eq!(sddpm_spline_build(h, null(), null(), Some(cancel), null_mut(), &mut s), Status::Cancelled);
+        assert!(s.is_null());
+        assert_eq!(sddpm_spline_build(h, null(), null(), None, null_mut(), &mut s), Status::Ok);
+        let (mut ne, mut nb) = (0usize, 0usize);
+        assert_eq!(sddpm_spline_counts(s, &mut ne, &mut nb), Status::Ok);
+        assert_eq!(ne, 1);
+        let mut n = 0usize;
+        assert_eq!(sddpm_spline_element_extraction(s, 0, null_mut(), null_mut(), 0, &mut n), Status::BufferTooSmall);
+        assert!(n > 0 && n <= nb);
+        let mut ids = vec![0u32; n];
+        let mut op = vec![0f64; 64 * n];
+        assert_eq!(sddpm_spline_element_extraction(s, 0, ids.as_mut_ptr(), op.as_mut_ptr(), n, &mut n), Status::Ok);
+        for b in 0..64 {
+            let col: f64 = (0..n).map(|r| op[r * 64 + b]).sum();
+            assert!((col - 1.0).abs() < 1e-12, "partition of unity, Bernstein {b}: {col}");
+        }
+        assert_eq!(sddpm_spline_element_extraction(s, 1, ids.as_mut_ptr(), op.as_mut_ptr(), n, &mut n), Status::InvalidArgument);
+        assert!(last_message().contains("element 1 does not exist"));
+        let mut x = [0f64; 3];
+        let mut j = [0f64; 9];
+        assert_eq!(sddpm_spline_evaluate(s, 0, 0.5, 0.5, 0.5, x.as_mut_ptr(), j.as_mut_ptr()), Status::Ok);
+        assert!(x.iter().all(|v| (v - 0.5).abs() < 1e-12), "{x:?}");
+        assert_eq!(sddpm_spline_evaluate(s, 0, -0.1, 0.5, 0.5, x.as_mut_ptr(), null_mut()), Status::InvalidArgument);
+        let dpath = CString::new(dir.to_str().unwrap()).unwrap();
+        assert_eq!(sddpm_spline_write(s, dpath.as_ptr()), Status::Ok);
+        assert!(dir.join("spline.bext").is_file() && dir.join("model.k").is_file());
+        sddpm_spline_free(s);
+        sddpm_spline_free(null_mut());
+        sddpm_hex_mesh_free(h);
+        sddpm_hex_mesh_free(null_mut());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
