@@ -1,6 +1,6 @@
 """libsddpm for Python: a thin ctypes layer over the library's C ABI.
 
-Objects (Mesh, Contexts, Model, Polycube) own their C handle and free it when
+Objects (Mesh, Contexts, Model, Polycube, HexMesh, Spline) own their C handle and free it when
 collected (or explicitly with ``close()`` / a ``with`` block). Arrays go in and
 come out as numpy arrays. Every failing call raises :class:`SddpmError` carrying
 the status number, its name and the library's message.
@@ -25,6 +25,9 @@ __all__ = [
     "Contexts",
     "Model",
     "Polycube",
+    "HexMesh",
+    "Spline",
+    "HEX_FORMATS",
     "load_library",
     "abi_version",
     "version",
@@ -107,6 +110,27 @@ class CandidateReport(C.Structure):
                 ("mean_target_pcd", C.c_double), ("score", C.c_double), ("chosen", C.c_bool)]
 
 
+class HexOptions(C.Structure):
+    _fields_ = [("level", C.c_int32), ("min_level", C.c_uint32), ("max_level", C.c_uint32), ("threshold", C.c_double),
+                ("max_elements", C.c_size_t), ("feature_angle", C.c_double), ("pillow", C.c_bool),
+                ("smooth_iterations", C.c_uint32), ("optimise_passes", C.c_uint32), ("optimise_target", C.c_double),
+                ("hex_candidates", C.c_uint32), ("accept_unverified", C.c_bool)]
+
+
+class HexQuality(C.Structure):
+    _fields_ = [("elements", C.c_size_t), ("nodes", C.c_size_t), ("min_scaled_jacobian", C.c_double),
+                ("mean_scaled_jacobian", C.c_double), ("max_scaled_jacobian", C.c_double), ("inverted", C.c_size_t),
+                ("hausdorff_relative", C.c_double), ("level", C.c_int32), ("volume", C.c_double), ("input_volume", C.c_double),
+                ("verified_polycube", C.c_bool)]
+
+
+class SplineOptions(C.Structure):
+    _fields_ = [("sharp_angle_deg", C.c_double), ("boundary_enrichment", C.c_bool), ("interpolate_vertices", C.c_bool),
+                ("repair_jacobian", C.c_bool), ("fit", C.c_bool), ("sparse_bext", C.c_bool)]
+
+
+HEX_FORMATS = {"vtu": 0, "vtk": 1, "mesh": 2, "k": 3}
+
 PROGRESS = C.CFUNCTYPE(C.c_int, C.c_double, C.c_char_p, C.c_void_p)
 _P = C.c_void_p
 _S = C.c_int32
@@ -157,6 +181,26 @@ _SIGNATURES = {
     "sddpm_polycube_candidate": (_S, [_P, _SZ, C.POINTER(CandidateReport)]),
     "sddpm_polycube_report_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
     "sddpm_polycube_copy_points": (_S, [_P, _DP, _DP, _SZ]),
+    "sddpm_hex_options_default": (_S, [C.POINTER(HexOptions)]),
+    "sddpm_hex_mesh_build": (_S, [_P, C.POINTER(HexOptions), PROGRESS, C.c_void_p, C.POINTER(_P)]),
+    "sddpm_hex_mesh_new_from_arrays": (_S, [_DP, _SZ, _U32P, _SZ, C.POINTER(_P)]),
+    "sddpm_hex_mesh_free": (None, [_P]),
+    "sddpm_hex_mesh_counts": (_S, [_P, C.POINTER(_SZ), C.POINTER(_SZ)]),
+    "sddpm_hex_mesh_copy_nodes": (_S, [_P, _DP, _SZ]),
+    "sddpm_hex_mesh_copy_elements": (_S, [_P, _U32P, _SZ]),
+    "sddpm_hex_mesh_copy_scaled_jacobian": (_S, [_P, _DP, _SZ]),
+    "sddpm_hex_mesh_histogram": (_S, [_P, C.POINTER(_SZ), _SZ]),
+    "sddpm_hex_mesh_quality": (_S, [_P, C.POINTER(HexQuality)]),
+    "sddpm_hex_mesh_report_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
+    "sddpm_hex_mesh_write": (_S, [_P, C.c_char_p, C.c_int32]),
+    "sddpm_spline_options_default": (_S, [C.POINTER(SplineOptions)]),
+    "sddpm_spline_build": (_S, [_P, _P, C.POINTER(SplineOptions), PROGRESS, C.c_void_p, C.POINTER(_P)]),
+    "sddpm_spline_free": (None, [_P]),
+    "sddpm_spline_counts": (_S, [_P, C.POINTER(_SZ), C.POINTER(_SZ)]),
+    "sddpm_spline_element_extraction": (_S, [_P, _SZ, _U32P, _DP, _SZ, C.POINTER(_SZ)]),
+    "sddpm_spline_evaluate": (_S, [_P, _SZ, C.c_double, C.c_double, C.c_double, _DP, _DP]),
+    "sddpm_spline_write": (_S, [_P, C.c_char_p]),
+    "sddpm_spline_report_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
 }
 
 _lib: Optional[C.CDLL] = None
@@ -515,3 +559,154 @@ class Polycube(_Handle):
         inp = np.empty((6144, 3))
         _check(load_library().sddpm_polycube_copy_points(self.handle, out.ctypes.data_as(_DP), inp.ctypes.data_as(_DP), out.size))
         return out, inp
+
+
+def _json(fn, handle) -> dict:
+    import json
+
+    need = _SZ()
+    fn(handle, None, 0, C.byref(need))
+    buf = C.create_string_buffer(need.value)
+    _check(fn(handle, buf, need.value, C.byref(need)))
+    return json.loads(buf.value.decode())
+
+
+# ---------------------------------------------------------------- HexMesh and Spline
+
+class HexMesh(_Handle):
+    """An all-hex mesh (VTK_HEXAHEDRON order) with its quality."""
+
+    _free = "sddpm_hex_mesh_free"
+
+    @staticmethod
+    def build(polycube: Polycube, level: Optional[int] = None, accept_unverified: bool = True, hex_candidates: Optional[int] = None,
+              progress: Optional[Callable[[float, str], bool]] = None, **options) -> "HexMesh":
+        """From a polycube result; other sddpm_hex_options fields by keyword (e.g. pillow=False)."""
+        lib = load_library()
+        o = HexOptions()
+        _check(lib.sddpm_hex_options_default(C.byref(o)))
+        if level is not None:
+            o.level = level
+        o.accept_unverified = accept_unverified
+        if hex_candidates is not None:
+            o.hex_candidates = hex_candidates
+        for k, v in options.items():
+            if k not in dict(HexOptions._fields_):
+                raise SddpmError(1, f"unknown hex option {k!r}")
+            setattr(o, k, v)
+        cb, box = _progress(progress)
+        h = _P()
+        st = lib.sddpm_hex_mesh_build(polycube.handle, C.byref(o), cb, None, C.byref(h))
+        hm = HexMesh(h) if h else None
+        if box["error"] is not None:
+            raise box["error"]
+        _check(st)
+        return hm
+
+    @staticmethod
+    def from_arrays(nodes, elements) -> "HexMesh":
+        x = np.ascontiguousarray(nodes, dtype=np.float64)
+        e = np.ascontiguousarray(elements, dtype=np.uint32)
+        if x.ndim != 2 or x.shape[1] != 3 or e.ndim != 2 or e.shape[1] != 8:
+            raise SddpmError(1, f"nodes must be (n, 3) and elements (m, 8), got {x.shape} and {e.shape}")
+        h = _P()
+        _check(load_library().sddpm_hex_mesh_new_from_arrays(x.ctypes.data_as(_DP), x.shape[0], e.ctypes.data_as(_U32P), e.shape[0], C.byref(h)))
+        return HexMesh(h)
+
+    def counts(self) -> tuple[int, int]:
+        n, e = _SZ(), _SZ()
+        _check(load_library().sddpm_hex_mesh_counts(self.handle, C.byref(n), C.byref(e)))
+        return n.value, e.value
+
+    @property
+    def nodes(self) -> np.ndarray:
+        a = np.empty((self.counts()[0], 3))
+        _check(load_library().sddpm_hex_mesh_copy_nodes(self.handle, a.ctypes.data_as(_DP), a.size))
+        return a
+
+    @property
+    def elements(self) -> np.ndarray:
+        a = np.empty((self.counts()[1], 8), dtype=np.uint32)
+        _check(load_library().sddpm_hex_mesh_copy_elements(self.handle, a.ctypes.data_as(_U32P), a.size))
+        return a
+
+    @property
+    def scaled_jacobian(self) -> np.ndarray:
+        a = np.empty(self.counts()[1])
+        _check(load_library().sddpm_hex_mesh_copy_scaled_jacobian(self.handle, a.ctypes.data_as(_DP), a.size))
+        return a
+
+    def histogram(self, bins: int = 20) -> np.ndarray:
+        a = (_SZ * bins)()
+        _check(load_library().sddpm_hex_mesh_histogram(self.handle, a, bins))
+        return np.array(list(a), dtype=np.int64)
+
+    def quality(self) -> dict:
+        q = HexQuality()
+        _check(load_library().sddpm_hex_mesh_quality(self.handle, C.byref(q)))
+        return {name: getattr(q, name) for name, _ in q._fields_}
+
+    def report(self) -> dict:
+        return _json(load_library().sddpm_hex_mesh_report_json, self.handle)
+
+    def write(self, path: str | os.PathLike, fmt: Optional[str] = None) -> None:
+        """fmt: "vtu", "vtk", "mesh" or "k" (default: from the file extension)."""
+        fmt = fmt or pathlib.Path(path).suffix.lstrip(".").lower()
+        if fmt not in HEX_FORMATS:
+            raise SddpmError(1, f"unknown hex format {fmt!r} (vtu, vtk, mesh, k)")
+        _check(load_library().sddpm_hex_mesh_write(self.handle, os.fsencode(path), HEX_FORMATS[fmt]))
+
+
+class Spline(_Handle):
+    """The TH-spline3D volume and its Bezier extraction."""
+
+    _free = "sddpm_spline_free"
+
+    @staticmethod
+    def build(hex_mesh: HexMesh, surface: Optional[Mesh] = None, progress: Optional[Callable[[float, str], bool]] = None, **options) -> "Spline":
+        lib = load_library()
+        o = SplineOptions()
+        _check(lib.sddpm_spline_options_default(C.byref(o)))
+        for k, v in options.items():
+            if k not in dict(SplineOptions._fields_):
+                raise SddpmError(1, f"unknown spline option {k!r}")
+            setattr(o, k, v)
+        cb, box = _progress(progress)
+        h = _P()
+        st = lib.sddpm_spline_build(hex_mesh.handle, surface.handle if surface else None, C.byref(o), cb, None, C.byref(h))
+        sp = Spline(h) if h else None
+        if box["error"] is not None:
+            raise box["error"]
+        _check(st)
+        return sp
+
+    def counts(self) -> tuple[int, int]:
+        e, b = _SZ(), _SZ()
+        _check(load_library().sddpm_spline_counts(self.handle, C.byref(e), C.byref(b)))
+        return e.value, b.value
+
+    def extraction(self, element: int) -> tuple[np.ndarray, np.ndarray]:
+        """(basis ids, operator (n, 64)) of one element; column i + 4j + 16k, u fastest."""
+        lib = load_library()
+        n = _SZ()
+        st = lib.sddpm_spline_element_extraction(self.handle, element, None, None, 0, C.byref(n))
+        if st not in (0, 12):
+            _check(st)
+        ids = np.empty(n.value, dtype=np.uint32)
+        op = np.empty((n.value, 64))
+        _check(lib.sddpm_spline_element_extraction(self.handle, element, ids.ctypes.data_as(_U32P), op.ctypes.data_as(_DP), n.value, C.byref(n)))
+        return ids, op
+
+    def evaluate(self, element: int, u: float, v: float, w: float) -> tuple[np.ndarray, np.ndarray]:
+        """The map at (u, v, w) and its Jacobian (3, 3)."""
+        x = np.empty(3)
+        j = np.empty((3, 3))
+        _check(load_library().sddpm_spline_evaluate(self.handle, element, u, v, w, x.ctypes.data_as(_DP), j.ctypes.data_as(_DP)))
+        return x, j
+
+    def write(self, folder: str | os.PathLike) -> None:
+        """spline.bext, model.k, spline.vtk, spline_control.vtk into folder."""
+        _check(load_library().sddpm_spline_write(self.handle, os.fsencode(folder)))
+
+    def report(self) -> dict:
+        return _json(load_library().sddpm_spline_report_json, self.handle)

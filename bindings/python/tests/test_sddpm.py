@@ -100,3 +100,49 @@ def test_polycube_progress_cancel_and_threads():
     [t.start() for t in ts]
     [t.join() for t in ts]
     assert res[0] == ref and res[1] == ref
+
+
+def test_whole_pipeline(tmp_path):
+    model = sddpm.Model.embedded()
+    mesh = sddpm.Mesh.load(DATA / "cgal_hole.off")
+    pc = sddpm.Polycube.generate(model, mesh, sddpm.Contexts.parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0"), steps=10)
+    hexm = sddpm.HexMesh.build(pc, level=1)
+    q = hexm.quality()
+    assert q["inverted"] == 0 and q["min_scaled_jacobian"] > 0.2 and q["hausdorff_relative"] < 0.01
+    sj = hexm.scaled_jacobian
+    assert sj.shape == (q["elements"],) and abs(sj.min() - q["min_scaled_jacobian"]) < 1e-15
+    assert hexm.histogram().sum() == q["elements"]
+    assert hexm.elements.max() < hexm.nodes.shape[0]
+    hexm.write(tmp_path / "hex.vtu")
+    hexm.write(tmp_path / "hex.k")
+    sp = sddpm.Spline.build(hexm)
+    ne, nb = sp.counts()
+    assert ne == q["elements"] and nb > 0
+    ids, op = sp.extraction(0)
+    assert op.shape == (len(ids), 64)
+    np.testing.assert_allclose(op.sum(axis=0), 1.0, atol=1e-12)  # partition of unity
+    x, j = sp.evaluate(0, 0.5, 0.5, 0.5)
+    assert np.linalg.det(j) > 0
+    sp.write(tmp_path)
+    for f in ["hex.vtu", "hex.k", "spline.bext", "model.k"]:
+        assert (tmp_path / f).is_file(), f
+    with pytest.raises(sddpm.SddpmError) as e:
+        sp.evaluate(0, 2.0, 0.5, 0.5)
+    assert e.value.name == "INVALID_ARGUMENT"
+    cube = sddpm.HexMesh.from_arrays([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], [list(range(8))])
+    assert cube.quality()["min_scaled_jacobian"] == pytest.approx(1.0)
+
+
+def test_freecad_macro_core(tmp_path):
+    """The FreeCAD macro's work, on a tessellation read from disk (FreeCAD not needed)."""
+    import importlib.util
+
+    path = pathlib.Path(__file__).resolve().parents[3] / "examples" / "freecad_sddpm_macro.py"
+    spec = importlib.util.spec_from_file_location("freecad_sddpm_macro", path)
+    macro = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(macro)
+    m = sddpm.Mesh.load(DATA / "cgal_hole.off")
+    s = macro.mesh_tessellation(m.vertices, m.triangles.astype(np.int64), str(tmp_path), contexts="THC+Z,0,0,0,0,0,0,0,0,0,0,0", level=1)
+    assert s["genus"] == 1 and s["hex"]["inverted"] == 0
+    for f in ["hex.vtu", "hex.k", "spline.bext", "model.k", "report.json"]:
+        assert (tmp_path / f).is_file(), f
