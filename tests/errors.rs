@@ -105,6 +105,23 @@ fn every_status_is_produced() {
     let n = sddpm::mesh::MAX_TRIANGLES + 1;
     let tri = vec![0u32; 3 * n];
     push(status_of(TriMesh::from_arrays(&[0.0; 9], &tri, &LoadOptions::default())));
+    // LIMIT_EXCEEDED also for coordinates near the f64 limits and for a microscopic part
+    let cube: Vec<f64> = (0..8).flat_map(|i: u32| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64]).collect();
+    let quads = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    let tris: Vec<u32> = quads.iter().flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]]).collect();
+    for (s, what) in [(1e307, "coordinate of magnitude above"), (1e-300, "below")] {
+        let x: Vec<f64> = cube.iter().map(|v| v * s).collect();
+        let r = TriMesh::from_arrays(&x, &tris, &LoadOptions::default());
+        let (st, m) = status_of(r);
+        assert_eq!(st, Status::LimitExceeded, "{m}");
+        assert!(m.contains(what), "{m}");
+    }
+    // a part thinner than the weld distance is refused with the fix, not collapsed silently
+    let x: Vec<f64> = cube.chunks(3).flat_map(|p| [p[0] * 1e6, p[1], p[2] * 1e-6]).collect();
+    let (st, m) = status_of(TriMesh::from_arrays(&x, &tris, &LoadOptions::default()));
+    assert_eq!(st, Status::InvalidMesh);
+    assert!(m.contains("collapsed") && m.contains("weld tolerance"), "{m}");
+    assert!(TriMesh::from_arrays(&x, &tris, &LoadOptions { weld_tolerance: 0.0, ..Default::default() }).unwrap().validate().is_ok());
     // SPLINE_FAILED: a heat-conduction solve on a flat element (singular Jacobian)
     let mut flat = HexMesh::unit_cube();
     for p in flat.nodes.iter_mut() {

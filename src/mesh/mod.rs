@@ -35,6 +35,12 @@ pub const DEFAULT_WELD_TOLERANCE: f64 = 1e-9;
 /// pipeline's own work is bounded by its samples and cells, so this limit is about
 /// memory: 5 million triangles take about 0.4 GB in memory with their checks.
 pub const MAX_TRIANGLES: usize = 5_000_000;
+/// Largest coordinate magnitude accepted (documented limit): squared distances and
+/// triple products of coordinates must stay finite in f64.
+pub const MAX_COORDINATE: f64 = 1e100;
+/// Smallest bounding-box diagonal accepted: signed volumes (cubes of lengths) must not
+/// underflow.
+pub const MIN_EXTENT: f64 = 1e-90;
 /// Largest mesh file read (1 GiB), checked before reading a byte.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
 
@@ -187,10 +193,48 @@ impl TriMesh {
                 p[2]
             )));
         }
+        // used vertices only: an unreferenced stray point must not decide the scale
+        let mut used = vec![false; self.vertices.len()];
+        for t in &self.triangles {
+            for &v in t {
+                if let Some(u) = used.get_mut(v as usize) {
+                    *u = true;
+                }
+            }
+        }
+        if let Some(i) = (0..self.vertices.len()).find(|&i| used[i] && self.vertices[i].iter().any(|c| c.abs() > MAX_COORDINATE)) {
+            let p = self.vertices[i];
+            return Err(Error::LimitExceeded(format!(
+                "vertex {i} at ({:e}, {:e}, {:e}) has a coordinate of magnitude above {MAX_COORDINATE:e}, the largest the library handles (squared distances must stay finite); rescale the model",
+                p[0], p[1], p[2]
+            )));
+        }
+        let used_pts: Vec<[f64; 3]> = (0..self.vertices.len()).filter(|&i| used[i]).map(|i| self.vertices[i]).collect();
+        // the longest bounding-box edge (no squares: they would underflow here)
+        let extent = crate::geometry::Aabb::of_points(&used_pts).size().iter().copied().fold(0.0, f64::max);
+        if extent > 0.0 && extent < MIN_EXTENT {
+            return Err(Error::LimitExceeded(format!(
+                "the longest bounding-box edge is {extent:e}, below {MIN_EXTENT:e}, the smallest the library handles (volumes would underflow); rescale the model"
+            )));
+        }
         if opts.weld_tolerance >= 0.0 {
             let diag = crate::geometry::Aabb::of_points(&self.vertices).diagonal();
             stats.weld_distance = opts.weld_tolerance * diag;
+            let distinct = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+            let before: Vec<bool> = self.triangles.iter().map(distinct).collect();
             stats.vertices_merged = weld::weld(&mut self, stats.weld_distance);
+            if stats.vertices_merged > 0 {
+                let collapsed: Vec<usize> = (0..self.triangles.len()).filter(|&t| before[t] && !distinct(&self.triangles[t])).collect();
+                if let Some(&first) = collapsed.first() {
+                    return Err(Error::InvalidMesh(format!(
+                        "welding vertices closer than {:e} ({} x the bounding-box diagonal) collapsed {} triangles (first: triangle {first}): \
+                         the part has features thinner than the weld distance; lower the weld tolerance (--weld-tolerance, LoadOptions::weld_tolerance)",
+                        stats.weld_distance,
+                        opts.weld_tolerance,
+                        collapsed.len()
+                    )));
+                }
+            }
         }
         if opts.remove_unreferenced {
             stats.unreferenced_removed = self.remove_unreferenced();
