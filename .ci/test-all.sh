@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest)
+packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest python3-distributed chromium pkg-config)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -22,6 +22,8 @@ fi
 jobs=$(nproc 2>/dev/null || echo 2)
 
 echo "== cargo test --release"
+# report.html is checked in headless Chromium (installed above): do not skip it here
+export SDDPM_REQUIRE_CHROMIUM=1
 cargo test --release
 
 echo "== cmake configure + build (build/)"

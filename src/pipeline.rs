@@ -218,24 +218,10 @@ pub fn run(
         let i = match fallback_candidate(&pr) {
             Some(i) => i,
             None => {
-                // nothing was diffused (every candidate refused by the pre-check): diffuse
-                // the best-fitting candidate without the pre-check's limits
-                let best = (0..pr.candidates.len())
-                    .filter(|&i| pr.candidates[i].context.validity().genus == Some(genus))
-                    .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit))
-                    .ok_or(e)?;
-                let ctx = pr.candidates[best].context;
-                let mut po = opts.polycube.clone();
-                po.max_fit = f64::INFINITY;
-                po.max_in_empty_fraction = 1.0;
-                po.min_occupied_fraction = 0.0;
-                let mut sub = SubProgress { inner: progress, lo: 0.45, hi: 0.5 };
-                let r = generate_from_contexts(model, mesh, genus, &[ctx], &po, &mut sub)?;
-                let Some(c) = r.candidates.into_iter().find(|c| c.input.is_some()) else {
-                    return Err(Error::VerificationFailed(format!("{}; the best-fitting candidate {ctx} could not be diffused either", verification_error.clone().unwrap_or_default())));
-                };
-                pr.candidates.push(c);
-                pr.candidates.len() - 1
+                // nothing was diffused (every candidate refused by the pre-check): lay
+                // out the best-fitting one without diffusion (the hex stage then works
+                // from the geometry alone)
+                prepare_fallback(&mut pr, mesh, &opts.polycube, genus).ok_or(e)?
             }
         };
         order = vec![i];
@@ -297,6 +283,23 @@ pub fn fallback_candidate(pr: &PolycubeResult) -> Option<usize> {
             let (ca, cb) = (&pr.candidates[a], &pr.candidates[b]);
             ((ca.stage == Stage::Gocc) as u8, ca.fit).partial_cmp(&((cb.stage == Stage::Gocc) as u8, cb.fit)).unwrap_or(std::cmp::Ordering::Equal)
         })
+}
+
+/// When the pre-check refused every candidate: give the best-fitting candidate of the
+/// input's genus its inference input (the map of the input into the polycube's box),
+/// without diffusion, and return its index; None when there is no such candidate.
+pub fn prepare_fallback(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, genus: i64) -> Option<usize> {
+    let best = (0..pr.candidates.len())
+        .filter(|&i| pr.candidates[i].context.validity().genus == Some(genus))
+        .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit))?;
+    if pr.candidates[best].input.is_none() {
+        let input = crate::context::generate::prepare_input(mesh, opts).ok()?;
+        let c = &pr.candidates[best];
+        let mut rng = crate::polycube::dataset::item_rng(opts.seed ^ 0x9e37, 0xfa11);
+        let inp = crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng).ok()?;
+        pr.candidates[best].input = Some(inp);
+    }
+    Some(best)
 }
 
 /// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh:

@@ -145,3 +145,41 @@ fn batch_meshes_a_folder_with_a_summary() {
     assert!(md.contains("| hole | OK | 1 |") && md.contains("INVALID_MESH"), "{md}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// report.html renders in headless Chromium: the screenshot is not blank and shows
+/// the pictures (many distinct colours). Chromium comes with the test command's
+/// packages; without it the test is skipped unless SDDPM_REQUIRE_CHROMIUM=1.
+#[test]
+fn report_html_renders_in_headless_chromium() {
+    let chromium = ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .find(|c| Command::new(c).arg("--version").output().map(|o| o.status.success()).unwrap_or(false));
+    let Some(chromium) = chromium else {
+        assert!(std::env::var("SDDPM_REQUIRE_CHROMIUM").is_err(), "chromium is required (SDDPM_REQUIRE_CHROMIUM) but not installed");
+        eprintln!("skipped: no chromium");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("sddpm-cli-html-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", dir.to_str().unwrap(), "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "-q"]);
+    assert_eq!(code, 0, "{err}");
+    let shot = dir.join("screenshot.png");
+    let url = format!("file://{}", dir.join("report.html").display());
+    let out = Command::new(chromium)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--window-size=1280,2400"])
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(&url)
+        .output()
+        .expect("run chromium");
+    assert!(shot.is_file(), "no screenshot: {}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&shot).expect("a PNG").to_rgb8();
+    let (w, h) = img.dimensions();
+    let non_white = img.pixels().filter(|p| p.0 != [255, 255, 255]).count() as f64 / (w * h) as f64;
+    let mut colours = std::collections::HashSet::new();
+    for p in img.pixels() {
+        colours.insert(p.0.map(|c| c / 16));
+    }
+    assert!(non_white > 0.05, "the page looks blank: {:.1}% non-white", 100.0 * non_white);
+    assert!(colours.len() > 50, "only {} colours: the pictures did not load", colours.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -7,7 +7,7 @@ use crate::error::{Error, Result, Status};
 use crate::hex::quality::{element_qualities, summarize};
 use crate::hex::{HexMesh, HexOptions, HexResult};
 use crate::mesh::TriMesh;
-use crate::pipeline::{build_hex_for_polycube, fallback_candidate, ranked_verified, RunOptions};
+use crate::pipeline::{build_hex_for_polycube, fallback_candidate, prepare_fallback, ranked_verified, RunOptions};
 use std::ffi::{c_char, c_void};
 
 /// An opaque all-hex mesh with its quality; not thread-safe to free while in use,
@@ -168,21 +168,29 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
         non_null(out, "out")?;
         let pc = &*polycube;
         let (mut hopts, n, accept) = hex_options(options.as_ref())?;
+        let mut result = std::borrow::Cow::Borrowed(&pc.result);
         let (order, verified) = if pc.result.chosen.is_some() {
             let mut o = ranked_verified(&pc.result);
             o.truncate(n);
             (o, true)
         } else {
+            let refusal = || pc.result.accepted().err().unwrap_or_else(|| Error::VerificationFailed("no candidate".into()));
+            if !accept {
+                return Err(refusal());
+            }
+            hopts.use_correspondence = false;
             match fallback_candidate(&pc.result) {
-                Some(i) if accept => {
-                    hopts.use_correspondence = false;
+                Some(i) => (vec![i], false),
+                None => {
+                    let r = result.to_mut();
+                    let genus = r.input_genus;
+                    let i = prepare_fallback(r, &pc.mesh, &pc.options, genus).ok_or_else(refusal)?;
                     (vec![i], false)
                 }
-                _ => return Err(pc.result.accepted().err().unwrap_or_else(|| Error::VerificationFailed("no candidate".into()))),
             }
         };
         let mut p = CProgress { callback: progress, user_data };
-        let (_, _, r) = build_hex_for_polycube(&pc.result, &order, &pc.mesh, &hopts, &mut p)?;
+        let (_, _, r) = build_hex_for_polycube(&result, &order, &pc.mesh, &hopts, &mut p)?;
         *out = Box::into_raw(Box::new(SddpmHexMesh {
             mesh: r.mesh.clone(),
             scaled_jacobian: r.scaled_jacobian.clone(),

@@ -188,6 +188,8 @@ pub struct SddpmPolycube {
     pub(crate) error: Option<Error>,
     /// The input surface (what the hex stage maps and the spline fits).
     pub(crate) mesh: crate::mesh::TriMesh,
+    /// The options it was generated with (the hex stage's fallback reuses them).
+    pub(crate) options: PolycubeOptions,
 }
 
 /// Generate polycube candidates for `mesh` and verify them. The request is, in
@@ -234,7 +236,7 @@ pub unsafe extern "C" fn sddpm_generate_polycube(
         };
         let mut p = CProgress { callback: progress, user_data };
         let (result, auto, error) = generate_polycube(&m.model, mesh, genus, &request, &popts, &aopts, &mut p)?;
-        *out = Box::into_raw(Box::new(SddpmPolycube { result, auto, error, mesh: mesh.clone() }));
+        *out = Box::into_raw(Box::new(SddpmPolycube { result, auto, error, mesh: mesh.clone(), options: popts }));
         Ok(())
     }
 }

@@ -20,6 +20,7 @@ from typing import Callable, Iterable, Optional, Sequence
 import numpy as np
 
 __all__ = [
+    "work",
     "SddpmError",
     "Mesh",
     "Contexts",
@@ -710,3 +711,6 @@ class Spline(_Handle):
 
     def report(self) -> dict:
         return _json(load_library().sddpm_spline_report_json, self.handle)
+
+
+from . import work  # noqa: E402  (the scale-out work unit; imports this module lazily)

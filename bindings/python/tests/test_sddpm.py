@@ -146,3 +146,28 @@ def test_freecad_macro_core(tmp_path):
     assert s["genus"] == 1 and s["hex"]["inverted"] == 0
     for f in ["hex.vtu", "hex.k", "spline.bext", "model.k", "report.json"]:
         assert (tmp_path / f).is_file(), f
+
+
+def test_dask_local_cluster(tmp_path):
+    """The work unit under Dask's local cluster: two worker processes, a bad file among good ones."""
+    distributed = pytest.importorskip("distributed")
+    import shutil
+
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(DATA / "cgal_hole.off", src / "hole.off")
+    shutil.copy(DATA / "cinolib_torus.obj", src / "torus.obj")
+    shutil.copy(DATA / "bad" / "cgal_cow.off", src / "cow.off")
+    files = sorted(src.iterdir())
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        futures = client.map(sddpm.work.mesh_file, [str(f) for f in files], [str(tmp_path / "out" / f.stem) for f in files],
+                             contexts="THC+Z,0,0,0,0,0,0,0,0,0,0,0", level=1, steps=10, spline=False)
+        res = {pathlib.Path(s["file"]).stem: s for s in client.gather(futures)}
+    assert res["cow"]["status"] == "INVALID_MESH" and "non-manifold" in res["cow"]["error"]
+    for name in ("hole", "torus"):
+        assert res[name]["status"] == "OK", res[name]
+        assert res[name]["inverted"] == 0
+        assert (tmp_path / "out" / name / "hex.vtu").is_file()
+    # the same work unit in this process gives the same mesh
+    local = sddpm.work.mesh_file(str(src / "hole.off"), str(tmp_path / "local"), contexts="THC+Z,0,0,0,0,0,0,0,0,0,0,0", level=1, steps=10, spline=False)
+    assert local["min_scaled_jacobian"] == res["hole"]["min_scaled_jacobian"]
