@@ -39,14 +39,20 @@ fn a_tiny_model_overfits_a_handful_of_samples() {
     let out = dir.join("tiny.sddpmw");
     train(&tiny_config(), &out, None, &mut |_| true).unwrap();
     let log = read_loss_csv(&sddpm::diffusion::train::checkpoint_dir_for(&out).join("loss.csv")).unwrap();
-    let first = log.first().unwrap().2;
-    let last = log.last().unwrap().2;
+    let losses: Vec<f64> = log.iter().map(|r| r.2).collect();
+    eprintln!("logged losses: {losses:?}");
+    let first = losses[0];
+    let tail = &losses[losses.len() - 5..];
+    let last = tail.iter().sum::<f64>() / tail.len() as f64;
     // 150 steps on one batch of 4: the noise-prediction loss of a fresh network is
     // about 1 (it predicts unit-variance noise from scratch). Four samples with
     // distinct contexts can be memorised, after which the noise is recoverable from
-    // x_t at every step, so the loss must fall well below; a factor of 3 leaves room
-    // for the random timesteps of the last logged window.
-    assert!(last < first / 3.0, "loss {first} -> {last}");
+    // x_t at most timesteps, so the loss must fall well below. Each logged value is
+    // the mean of 10 steps with random timesteps, whose spread is large (the
+    // per-timestep error ranges from ~0.001 at t = 500 to ~0.6 at t = 2, see
+    // BENCHMARKS.md); the mean of the last five logged windows (50 steps) is compared,
+    // and a factor of 3 below the fresh network is required.
+    assert!(last < first / 3.0, "loss {first} -> {last} (mean of the last 5 windows)");
 }
 
 #[test]

@@ -140,8 +140,14 @@ pub fn train(
         }
         None => {
             cfg = requested.clone();
+            // burn's seed is one process-wide generator: hold a lock from seeding to the
+            // end of the initialisation so that concurrent trainings (tests run in
+            // parallel, a library caller's threads) cannot interleave their draws
+            static INIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+            let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
             ad.seed(cfg.seed);
             net = Denoiser::new(&cfg.model, &ad);
+            drop(_guard);
             opt = adam();
             epoch0 = 0;
             step = 0;
