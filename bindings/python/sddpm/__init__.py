@@ -714,3 +714,7 @@ class Spline(_Handle):
 
 
 from . import work  # noqa: E402  (the scale-out work unit; imports this module lazily)
+
+#: The issue's name for the context object (a stack of one or more contexts).
+Context = Contexts
+__all__.append("Context")
