@@ -258,7 +258,7 @@ pub(crate) fn check(mesh: &TriMesh) -> MeshReport {
             severity: Severity::Error,
             count: collapsed.len(),
             message: format!(
-                "collapsed triangles: {} triangles repeat a vertex; first triangle {t} = ({}, {}, {}) at {}",
+                "collapsed triangles: {} triangles repeat a vertex (welding merges vertices closer than the weld tolerance times the bounding-box diagonal: if the part is thinner than that, lower the weld tolerance, --weld-tolerance / LoadOptions::weld_tolerance); first triangle {t} = ({}, {}, {}) at {}",
                 collapsed.len(),
                 tri[0],
                 tri[1],

@@ -220,21 +220,7 @@ impl TriMesh {
         if opts.weld_tolerance >= 0.0 {
             let diag = crate::geometry::Aabb::of_points(&self.vertices).diagonal();
             stats.weld_distance = opts.weld_tolerance * diag;
-            let distinct = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-            let before: Vec<bool> = self.triangles.iter().map(distinct).collect();
             stats.vertices_merged = weld::weld(&mut self, stats.weld_distance);
-            if stats.vertices_merged > 0 {
-                let collapsed: Vec<usize> = (0..self.triangles.len()).filter(|&t| before[t] && !distinct(&self.triangles[t])).collect();
-                if let Some(&first) = collapsed.first() {
-                    return Err(Error::InvalidMesh(format!(
-                        "welding vertices closer than {:e} ({} x the bounding-box diagonal) collapsed {} triangles (first: triangle {first}): \
-                         the part has features thinner than the weld distance; lower the weld tolerance (--weld-tolerance, LoadOptions::weld_tolerance)",
-                        stats.weld_distance,
-                        opts.weld_tolerance,
-                        collapsed.len()
-                    )));
-                }
-            }
         }
         if opts.remove_unreferenced {
             stats.unreferenced_removed = self.remove_unreferenced();
