@@ -43,6 +43,25 @@ pub enum Status {
 }
 
 impl Status {
+    /// Every status, in number order.
+    pub const ALL: [Status; 15] = [
+        Status::Ok,
+        Status::InvalidArgument,
+        Status::Io,
+        Status::Parse,
+        Status::InvalidMesh,
+        Status::InvalidContext,
+        Status::GenusMismatch,
+        Status::VerificationFailed,
+        Status::Model,
+        Status::MeshingFailed,
+        Status::SplineFailed,
+        Status::Cancelled,
+        Status::BufferTooSmall,
+        Status::LimitExceeded,
+        Status::Internal,
+    ];
+
     pub fn name(self) -> &'static str {
         match self {
             Status::Ok => "OK",

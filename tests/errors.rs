@@ -12,23 +12,7 @@ use sddpm::mesh::{LoadOptions, TriMesh};
 use sddpm::pipeline::{generate_polycube, run, ContextRequest, RunOptions};
 use std::collections::BTreeSet;
 
-const ALL: [Status; 15] = [
-    Status::Ok,
-    Status::InvalidArgument,
-    Status::Io,
-    Status::Parse,
-    Status::InvalidMesh,
-    Status::InvalidContext,
-    Status::GenusMismatch,
-    Status::VerificationFailed,
-    Status::Model,
-    Status::MeshingFailed,
-    Status::SplineFailed,
-    Status::Cancelled,
-    Status::BufferTooSmall,
-    Status::LimitExceeded,
-    Status::Internal,
-];
+const ALL: [Status; 15] = Status::ALL;
 
 fn data(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes").join(name)

@@ -166,23 +166,7 @@ pub extern "C" fn sddpm_status_name(status: i32) -> *const c_char {
     }
 }
 
-const ALL_STATUS: [Status; 15] = [
-        Status::Ok,
-        Status::InvalidArgument,
-        Status::Io,
-        Status::Parse,
-        Status::InvalidMesh,
-        Status::InvalidContext,
-        Status::GenusMismatch,
-        Status::VerificationFailed,
-        Status::Model,
-        Status::MeshingFailed,
-        Status::SplineFailed,
-        Status::Cancelled,
-        Status::BufferTooSmall,
-        Status::LimitExceeded,
-        Status::Internal,
-];
+const ALL_STATUS: [Status; 15] = Status::ALL;
 
 fn status_from_i32(n: i32) -> Option<Status> {
     ALL_STATUS.into_iter().find(|s| *s as i32 == n)
