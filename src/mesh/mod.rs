@@ -112,7 +112,25 @@ impl TriMesh {
         let path = path.as_ref();
         let shown = path.display().to_string();
         let (bytes, format) = io::read_file(path)?;
-        let soup = io::parse(&bytes, format, &shown)?;
+        Self::from_bytes_with_stats(&bytes, Some(format), &shown, opts)
+    }
+
+    /// A mesh from the bytes of an OBJ / STL / OFF file held in memory; `format` None
+    /// sniffs it from the content; `name` is what messages call it.
+    pub fn from_bytes(bytes: &[u8], format: Option<Format>, name: &str, opts: &LoadOptions) -> Result<TriMesh> {
+        Self::from_bytes_with_stats(bytes, format, name, opts).map(|(m, _)| m)
+    }
+
+    /// [`TriMesh::from_bytes`], also returning what loading did.
+    pub fn from_bytes_with_stats(bytes: &[u8], format: Option<Format>, name: &str, opts: &LoadOptions) -> Result<(TriMesh, LoadStats)> {
+        if bytes.len() as u64 > MAX_FILE_BYTES {
+            return Err(Error::LimitExceeded(format!("{name}: {} bytes, more than the {MAX_FILE_BYTES} a mesh file may have", bytes.len())));
+        }
+        let shown = name.to_string();
+        let format = format
+            .or_else(|| Format::sniff(bytes))
+            .ok_or_else(|| Error::parse(&shown, "unknown mesh format: expected OBJ, STL or OFF content"))?;
+        let soup = io::parse(bytes, format, &shown)?;
         check_triangle_limit(soup.triangles.len(), &shown)?;
         let mut stats = LoadStats {
             format: Some(match format {
