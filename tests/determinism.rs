@@ -25,8 +25,14 @@ fn options(seed: u64) -> RunOptions {
 /// scaled Jacobians, the spline's report.
 fn fingerprint(r: &RunResult) -> Vec<u64> {
     let mut v = Vec::new();
-    let c = &r.polycube.candidates[r.candidate];
-    v.extend(c.output.as_ref().unwrap().iter().map(|x| x.to_bits() as u64));
+    // every diffusion output (the meshed candidate may have none: the model-free
+    // fallback when the pre-check refused every candidate)
+    for c in &r.polycube.candidates {
+        if let Some(o) = &c.output {
+            v.extend(o.iter().map(|x| x.to_bits() as u64));
+        }
+    }
+    v.push(r.candidate as u64);
     v.extend(r.hex.mesh.nodes.iter().flatten().map(|x| x.to_bits()));
     v.extend(r.hex.mesh.elements.iter().flatten().map(|&x| x as u64));
     v.extend(r.hex.scaled_jacobian.iter().map(|x| x.to_bits()));
