@@ -30,6 +30,18 @@ pub struct TrainArgs {
     /// Train on the first N samples only (quick experiments).
     #[arg(long)]
     pub limit: Option<usize>,
+    /// Start from these weights (fine-tuning) instead of a seeded initialisation.
+    #[arg(long)]
+    pub init_from: Option<PathBuf>,
+    /// Largest training timestep (0 = T).
+    #[arg(long)]
+    pub t_max: Option<usize>,
+    /// Timestep density exponent p: t = 1 + floor(t_max u^p); 1 = uniform.
+    #[arg(long)]
+    pub t_power: Option<f64>,
+    /// Fraction of the learning rate left at the last step.
+    #[arg(long)]
+    pub final_lr: Option<f64>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -50,6 +62,16 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     if let Some(lr) = a.lr {
         cfg.learning_rate = lr;
     }
+    if let Some(t) = a.t_max {
+        cfg.t_max = t;
+    }
+    if let Some(p) = a.t_power {
+        cfg.t_power = p;
+    }
+    if let Some(f) = a.final_lr {
+        cfg.final_lr_fraction = f;
+    }
+    cfg.init_from = a.init_from.clone();
     if !a.quiet {
         eprintln!(
             "training: {} epochs, batch {}, width {}, lr {:.1e}, seed {}; checkpoints in {}",

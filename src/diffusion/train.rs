@@ -42,6 +42,16 @@ pub struct TrainConfig {
     /// Average the loss over occupied cells only (null cells are known and held by
     /// replacement in the sampler, so the network need not learn them).
     pub mask_null_cells: bool,
+    /// Largest training timestep (0 = T). Fine-tuning for the sampler's range: the
+    /// default sampler starts at t = 200, so steps above it are never evaluated.
+    pub t_max: usize,
+    /// Timestep density: t = 1 + floor(t_max * u^p), u ~ U(0, 1). p = 1 is uniform;
+    /// p = 2 has density proportional to 1 / sqrt(t), i.e. more low-noise steps, where
+    /// the network must place points to a small fraction of the noise level.
+    pub t_power: f64,
+    /// Weights file to start from (fine-tuning) instead of a seeded initialisation;
+    /// the architecture and schedule come from that file, the optimiser starts fresh.
+    pub init_from: Option<std::path::PathBuf>,
     pub dataset: DatasetConfig,
     pub model: ModelConfig,
     pub schedule: ScheduleConfig,
@@ -58,6 +68,9 @@ impl Default for TrainConfig {
             log_every: 25,
             limit_samples: None,
             mask_null_cells: true,
+            t_max: 0,
+            t_power: 1.0,
+            init_from: None,
             dataset: DatasetConfig::default(),
             model: ModelConfig::default(),
             schedule: ScheduleConfig::default(),
@@ -139,14 +152,28 @@ pub fn train(
             ckdir = dir.to_path_buf();
         }
         None => {
-            cfg = requested.clone();
+            let mut c = requested.clone();
+            let init = match &c.init_from {
+                Some(p) => {
+                    let bytes = std::fs::read(p).map_err(io(p))?;
+                    let (meta, rec) = super::weights::decode(&bytes)?;
+                    c.model = meta.model.clone();
+                    c.schedule = meta.schedule.clone();
+                    Some((meta, rec.to_vec()))
+                }
+                None => None,
+            };
+            cfg = c;
             // burn's seed is one process-wide generator: hold a lock from seeding to the
             // end of the initialisation so that concurrent trainings (tests run in
             // parallel, a library caller's threads) cannot interleave their draws
             static INIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
             let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
             ad.seed(cfg.seed);
-            net = Denoiser::new(&cfg.model, &ad);
+            net = match &init {
+                Some((_, rec)) => load_net(&cfg.model, rec, &ad)?,
+                None => Denoiser::new(&cfg.model, &ad),
+            };
             drop(_guard);
             opt = adam();
             epoch0 = 0;
@@ -208,7 +235,8 @@ fn train_loop(
                 x0.extend_from_slice(&data[i].tensor);
                 ctx.extend_from_slice(&data[i].context.one_hot());
             }
-            let ts: Vec<usize> = (0..b).map(|_| srng.random_range(1..=sched.steps())).collect();
+            let t_max = if cfg.t_max == 0 { sched.steps() } else { cfg.t_max.min(sched.steps()) };
+            let ts: Vec<usize> = (0..b).map(|_| training_timestep(&mut srng, t_max, cfg.t_power)).collect();
             let z: Vec<f32> = (0..b * TENSOR_LEN).map(|_| StandardNormal.sample(&mut srng)).collect();
             let mut xt = vec![0f32; b * TENSOR_LEN];
             for i in 0..b {
@@ -273,6 +301,15 @@ fn train_loop(
     Ok(meta)
 }
 
+/// A training timestep in 1..=t_max: t = 1 + floor(t_max * u^p).
+fn training_timestep(rng: &mut impl rand::Rng, t_max: usize, p: f64) -> usize {
+    if p == 1.0 {
+        return rng.random_range(1..=t_max);
+    }
+    let u: f64 = rng.random_range(0.0..1.0);
+    (1 + (t_max as f64 * u.powf(p.max(1e-3))) as usize).min(t_max)
+}
+
 /// 1 on the pixels of occupied cells, 0 on null cells: [B, 1, 64, 96].
 fn occupied_mask<'a>(ctxs: impl Iterator<Item = &'a crate::context::Context>) -> Vec<f32> {
     use crate::polycube::tensor::{slot, POINTS_PER_CELL};
@@ -305,6 +342,9 @@ fn meta_for(cfg: &TrainConfig, epochs: usize, steps: usize, loss: f64, seconds: 
             learning_rate: cfg.learning_rate,
             final_loss: loss,
             seconds,
+            t_max: cfg.t_max,
+            t_power: cfg.t_power,
+            init_from: cfg.init_from.as_ref().map(|p| p.display().to_string()),
         },
         dtype: "f32".into(),
     }

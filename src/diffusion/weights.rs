@@ -30,6 +30,18 @@ pub struct TrainingInfo {
     pub learning_rate: f64,
     pub final_loss: f64,
     pub seconds: f64,
+    /// Largest training timestep (0 = all T) and the timestep density exponent.
+    #[serde(default)]
+    pub t_max: usize,
+    #[serde(default = "one")]
+    pub t_power: f64,
+    /// The weights this run was fine-tuned from (None = seeded initialisation).
+    #[serde(default)]
+    pub init_from: Option<String>,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// Metadata stored in front of the parameters.

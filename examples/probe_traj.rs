@@ -1,0 +1,35 @@
+//! Developer probe: Chamfer of the (rescaled) reverse-process state to the cell's
+//! template along the trajectory, from an exact cell. Args: weights labels steps start
+use sddpm::context::Context;
+use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
+use sddpm::diffusion::{Backend, Model};
+use sddpm::error::NoProgress;
+use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_W};
+use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();
+    let ctx = Context::parse(&args[2]).unwrap();
+    let steps: usize = args[3].parse().unwrap();
+    let start: usize = args[4].parse().unwrap();
+    let mut rng = item_rng(5, 5);
+    let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    let frame = context_frame(&ctx).unwrap();
+    let tpl = cached_templates(2048);
+    let sched = &model.schedule;
+    let keep = if steps == 0 { 10 } else { 1 };
+    let out = reverse_diffusion(&model, &[x0], &[ctx.clone()], &SamplerOptions { steps, start_step: start, keep_every: keep, ..Default::default() }, &mut NoProgress).unwrap();
+    let hw = TENSOR_H * TENSOR_W;
+    for (t, x) in &out.trajectory[0] {
+        let sa = sched.alpha_bar[*t].sqrt();
+        let y: Vec<f32> = x.iter().enumerate().map(|(k, v)| ((*v as f64 - sched.qcoef[*t] * sched.config.q[k / hw]) / sa) as f32).collect();
+        let mut s = format!("t={t:4}");
+        for n in ctx.occupied() {
+            let loc = local_points(&active_points(&y, n, 1e-4), frame.scale);
+            let lab = ctx.labels[n].label() as usize;
+            s += &format!(" cell{n}: own {:.4}", chamfer(&loc, &tpl[lab]));
+        }
+        println!("{s}");
+    }
+}
