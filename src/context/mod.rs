@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::polycube::assembly::{assemble, check, VoxelGrid, Validity};
 use crate::polycube::primitive::{cell_coords, Family, Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use serde::{Deserialize, Serialize};
 
 /// A labelling of the 12 cells (cell index order n = 6k + 3j + i).
@@ -274,6 +275,7 @@ impl Constraints {
             .filter(|&m| valid_occ[m as usize])
             .collect();
         let genus = self.genus;
+        let budget = Budget { checked: AtomicUsize::new(0), limit: MAX_ASSIGNMENTS };
         let mut out: Vec<Context> = masks
             .par_iter()
             .flat_map_iter(|&mask| {
@@ -282,28 +284,58 @@ impl Constraints {
                 let mut labels = [Primitive::Null; NUM_CELLS];
                 let mut fam_used = [0usize; 4];
                 let mut lab_used = [0usize; NUM_LABELS];
-                assign(&cells, 0, &mut labels, &mut fam_used, &mut lab_used, &fam_count, &per_label, genus, &mut found);
+                let limits = Limits { fam_count: &fam_count, per_label: &per_label, genus, budget: &budget };
+                assign(&cells, 0, &mut labels, &mut fam_used, &mut lab_used, &limits, &mut found);
                 found
             })
             .collect();
+        let checked = budget.checked.load(Ordering::Relaxed);
+        if checked > budget.limit {
+            let free = masks.iter().map(|m| m.count_ones()).max().unwrap_or(0);
+            return Err(Error::InvalidArgument(format!(
+                "constraints: more than {} label assignments to check (up to {free} occupied cells with free labels); \
+                 fix the counts per category or per label, the allowed cells or the genus to narrow the search",
+                budget.limit
+            )));
+        }
         out.sort();
         out.dedup();
         Ok(out)
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Most complete label assignments [`Constraints::enumerate`] checks before it refuses
+/// the constraints as too loose (each check assembles the solid and computes its
+/// genus, about 80 us each on one core of the development machine, so the bound
+/// costs at most a few seconds). Without the bound, free counts
+/// over many cells ask for up to 10^12 assignments and the call would never return.
+pub const MAX_ASSIGNMENTS: usize = 100_000;
+
+struct Budget {
+    checked: AtomicUsize,
+    limit: usize,
+}
+
+struct Limits<'a> {
+    fam_count: &'a [Option<usize>; 4],
+    per_label: &'a [Option<usize>; NUM_LABELS],
+    genus: Option<i64>,
+    budget: &'a Budget,
+}
+
 fn assign(
     cells: &[usize],
     pos: usize,
     labels: &mut [Primitive; NUM_CELLS],
     fam_used: &mut [usize; 4],
     lab_used: &mut [usize; NUM_LABELS],
-    fam_count: &[Option<usize>; 4],
-    per_label: &[Option<usize>; NUM_LABELS],
-    genus: Option<i64>,
+    lim: &Limits,
     out: &mut Vec<Context>,
 ) {
+    let (fam_count, per_label, genus) = (lim.fam_count, lim.per_label, lim.genus);
+    if lim.budget.checked.load(Ordering::Relaxed) > lim.budget.limit {
+        return;
+    }
     let remaining = cells.len() - pos;
     // Prune: family counts still reachable?
     let mut need = 0;
@@ -336,6 +368,10 @@ fn assign(
                 return;
             }
         }
+        if lim.budget.checked.fetch_add(1, Ordering::Relaxed) >= lim.budget.limit {
+            lim.budget.checked.store(lim.budget.limit + 1, Ordering::Relaxed);
+            return;
+        }
         let ctx = Context { labels: *labels };
         let v = ctx.validity();
         if v.valid && genus.is_none_or(|g| v.genus == Some(g)) {
@@ -354,7 +390,7 @@ fn assign(
         labels[n] = p;
         fam_used[f] += 1;
         lab_used[p.label() as usize] += 1;
-        assign(cells, pos + 1, labels, fam_used, lab_used, fam_count, per_label, genus, out);
+        assign(cells, pos + 1, labels, fam_used, lab_used, lim, out);
         fam_used[f] -= 1;
         lab_used[p.label() as usize] -= 1;
     }
@@ -384,6 +420,19 @@ pub fn valid_cube_occupancies() -> &'static [bool; 4096] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn loose_constraints_are_refused_not_enumerated_forever() {
+        // every count free on all twelve cells: about 10^12 assignments
+        let t = std::time::Instant::now();
+        let e = Constraints::default().enumerate().unwrap_err().to_string();
+        assert!(e.contains("label assignments") && e.contains("narrow"), "{e}");
+        // the refusal is bounded by MAX_ASSIGNMENTS checks, not by the size of the space
+        assert!(t.elapsed().as_secs() < 120, "{:?}", t.elapsed());
+        // a fixed total keeps the search within the bound
+        let k = Constraints { cube: Some(2), thc: Some(0), bhc: Some(0), ..Default::default() };
+        assert!(!k.enumerate().unwrap().is_empty());
+    }
 
     #[test]
     fn one_hot_round_trip_and_errors() {
