@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The project's one test command (README "Tests"): installs the Debian packages
 # the tests need (skipped when already installed), runs every cargo test, builds
-# the CMake project in build/ and runs ctest. Exits nonzero if anything fails.
+# the CMake project in build/ and runs ctest (including the Valgrind memcheck set),
+# then builds the C++ tests again with ASan + UBSan in build-asan/ and runs them. Exits nonzero if anything fails.
 # Idempotent: run it as often as you like.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest python3-distributed chromium pkg-config)
+packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest python3-distributed chromium pkg-config valgrind)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -32,3 +33,10 @@ cmake --build build -j"$jobs"
 
 echo "== ctest"
 ctest --test-dir build --output-on-failure -j"$jobs"
+
+echo "== cpp_tests under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)"
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDDPM_SANITIZE=ON
+cmake --build build-asan -j"$jobs"
+ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1 \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure -j"$jobs"
