@@ -140,6 +140,9 @@ struct BadCase {
   sddpm_status validate;  // expected from sddpm_mesh_validate
   const char* needle;     // expected in the message
 };
+// GoogleTest prints a parameter it cannot format as raw bytes, padding included
+// (Valgrind reports those as uninitialised): give it a printer.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.file; }
 
 class BadMesh : public testing::TestWithParam<BadCase> {};
 
