@@ -1,7 +1,7 @@
 //! The paper's IGA temperature analysis, on the spline volume: steady heat
 //! conduction with uniform internal heat generation, -k ΔT = q in the volume, the
 //! surface held at T = 0 (a cooled part). Solved with the project's IGA solver on
-//! the TH-spline3D of a hex mesh, then rendered: the spline sampled at 4 x 4 x 4
+//! the TH-spline3D of a hex mesh, then rendered: the spline sampled at 7 x 7 x 7
 //! points per element, the half of the part nearer the camera cut away so the hot
 //! core shows, points coloured by T (blue = 0, red = max) with a colour bar.
 //!
@@ -31,7 +31,7 @@ fn main() -> sddpm::Result<()> {
     }
     let path = Path::new(&args[1]);
     let hex = match path.extension().and_then(|e| e.to_str()) {
-        Some("vtu") => sddpm::export::hexfmt::read_vtu(path)?.mesh,
+        Some("vtu") => sddpm::export::hexfmt::read_vtu(path)?.0,
         Some("mesh") => sddpm::export::hexfmt::read_medit(path)?,
         Some("k") => sddpm::export::hexfmt::read_lsdyna(path)?,
         _ => sddpm::export::vtk::read_vtk_legacy(path)?,
@@ -50,7 +50,7 @@ fn main() -> sddpm::Result<()> {
     let q = 1.0 / diag2;
     let sol = solve_poisson(&sp, |_| q, |_| 0.0, &PoissonOptions::default())?;
     // sample every element
-    let g = [0.125, 0.375, 0.625, 0.875];
+    let g: Vec<f64> = (0..7).map(|i| (i as f64 + 0.5) / 7.0).collect();
     let mut pts = Vec::new();
     let mut vals = Vec::new();
     for e in 0..sp.num_elements() {
@@ -75,7 +75,7 @@ fn main() -> sddpm::Result<()> {
     let kp: Vec<[f64; 3]> = keep.iter().map(|&i| pts[i]).collect();
     let kc: Vec<[u8; 3]> = keep.iter().map(|&i| colour(vals[i] / tmax.max(1e-300))).collect();
     let (w, h) = (900usize, 760usize);
-    let mut canvas = render(&[Layer::Points { points: &kp, colours: &kc, radius_px: 2.2 }], w, h, cam)?;
+    let mut canvas = render(&[Layer::Points { points: &kp, colours: &kc, radius_px: 2.6 }], w, h, cam)?;
     // colour bar on the right edge, T = 0 at the bottom, max at the top
     for y in 60..h - 60 {
         let s = 1.0 - (y - 60) as f64 / (h - 121) as f64;
