@@ -21,6 +21,9 @@ pub struct TrainArgs {
     /// Base width of the U-Net.
     #[arg(long)]
     pub width: Option<usize>,
+    /// Width of the pointwise head (0 = none; see ModelConfig::point_width).
+    #[arg(long)]
+    pub point_width: Option<usize>,
     /// Batch size.
     #[arg(long)]
     pub batch: Option<usize>,
@@ -55,6 +58,9 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     }
     if let Some(w) = a.width {
         cfg.model.base_width = w;
+    }
+    if let Some(p) = a.point_width {
+        cfg.model.point_width = p;
     }
     if let Some(b) = a.batch {
         cfg.batch_size = b;

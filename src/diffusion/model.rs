@@ -38,11 +38,21 @@ pub struct ModelConfig {
     pub cell_dim: usize,
     /// Groups of the group normalisations.
     pub groups: usize,
+    /// Width of the pointwise head (0 = none). The head is a small per-point network
+    /// at full resolution (1x1 convolutions) that sees the point's own coordinates,
+    /// its rank channels, the U-Net's last features and their mean over the point's
+    /// cell, modulated by the time / context embedding and the per-cell code; its
+    /// output is added to the U-Net's. The noise a point carries at low noise levels
+    /// is a nearly pointwise function of the point given the context (its offset from
+    /// the primitive's surface over sigma), which 3x3 convolutions over the sorted
+    /// layout's neighbours, which are not spatial neighbours, represent poorly.
+    #[serde(default)]
+    pub point_width: usize,
 }
 
 impl Default for ModelConfig {
     fn default() -> Self {
-        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8 }
+        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0 }
     }
 }
 
@@ -122,6 +132,55 @@ impl ResBlock {
     }
 }
 
+/// Mean of [B, C, 64, 96] over each cell's 16 x 32 block, broadcast back to the block.
+fn cell_mean(x: Tensor<4>) -> Tensor<4> {
+    let [b, c, h, w] = x.dims();
+    let (bh, bw) = (h / 4, w / 3);
+    let m = x.reshape([b, c, 4, bh, 3, bw]).mean_dim(3).mean_dim(5).reshape([b, c, 4, 3]);
+    upsample(m, bh, bw)
+}
+
+/// The pointwise head (see [`ModelConfig::point_width`]).
+#[derive(Module, Debug)]
+pub struct PointHead {
+    inp: Conv2d,
+    emb: Linear,
+    cell: Linear,
+    hid: Conv2d,
+    out: Conv2d,
+    width: usize,
+}
+
+impl PointHead {
+    fn new(c0: usize, cfg: &ModelConfig, device: &Device) -> Self {
+        let pw = cfg.point_width;
+        PointHead {
+            inp: conv1(5 + 2 * c0, pw, device),
+            emb: LinearConfig::new(cfg.emb_dim, 2 * pw).init(device),
+            cell: LinearConfig::new(cfg.cell_dim, 2 * pw).init(device),
+            hid: conv1(pw, pw, device),
+            out: conv1(pw, 3, device),
+            width: pw,
+        }
+    }
+
+    /// `xin`: [B, 5, H, W] (point + rank channels); `feats`: [B, c0, H, W].
+    fn forward(&self, xin: Tensor<4>, feats: Tensor<4>, emb: Tensor<2>, cells: Tensor<3>) -> Tensor<4> {
+        let [b, _, h, w] = xin.dims();
+        let pw = self.width;
+        let pooled = cell_mean(feats.clone());
+        let hid = silu(self.inp.forward(Tensor::cat(vec![xin, feats, pooled], 1)));
+        let g = self.emb.forward(emb).reshape([b, 2 * pw, 1, 1]);
+        let pc = self.cell.forward(cells).reshape([b, 4, 3, 2 * pw]).permute([0, 3, 1, 2]);
+        let m = upsample(pc, h / 4, w / 3) + g;
+        let gamma = m.clone().narrow(1, 0, pw);
+        let beta = m.narrow(1, pw, pw);
+        let hid = hid * (gamma + 1.0) + beta;
+        let hid = silu(self.hid.forward(hid));
+        self.out.forward(hid)
+    }
+}
+
 /// The U-Net.
 #[derive(Module, Debug)]
 pub struct Denoiser {
@@ -142,6 +201,7 @@ pub struct Denoiser {
     dec0: ResBlock,
     norm_out: GroupNorm,
     conv_out: Conv2d,
+    point: Option<PointHead>,
     time_dim: usize,
     cell_dim: usize,
 }
@@ -170,6 +230,7 @@ impl Denoiser {
             dec0: ResBlock::new(c1 + c0, c0, cfg, device),
             norm_out: group_norm(cfg.groups, c0, device),
             conv_out: conv3(c0, 3, 1, device),
+            point: (cfg.point_width > 0).then(|| PointHead::new(c0, cfg, device)),
             time_dim: cfg.time_dim,
             cell_dim: cfg.cell_dim,
         }
@@ -188,6 +249,7 @@ impl Denoiser {
 
         let coords = Tensor::<4>::from_data(TensorData::new(coordinate_channels(), [1, 2, h, w]), &device).expand([b, 2, h, w]);
         let x = Tensor::cat(vec![x, coords], 1);
+        let xin = self.point.as_ref().map(|_| x.clone());
         let h0 = self.conv_in.forward(x);
         let h0 = self.enc0.forward(h0, emb.clone(), cells.clone());
         let h1 = self.down0.forward(h0.clone());
@@ -198,8 +260,12 @@ impl Denoiser {
         let u1 = upsample(h2, 2, 2);
         let u1 = self.dec1.forward(Tensor::cat(vec![u1, h1], 1), emb.clone(), cells.clone());
         let u0 = upsample(u1, 2, 2);
-        let u0 = self.dec0.forward(Tensor::cat(vec![u0, h0], 1), emb, cells);
-        self.conv_out.forward(silu(self.norm_out.forward(u0)))
+        let u0 = self.dec0.forward(Tensor::cat(vec![u0, h0], 1), emb.clone(), cells.clone());
+        let out = self.conv_out.forward(silu(self.norm_out.forward(u0.clone())));
+        match (&self.point, xin) {
+            (Some(p), Some(xin)) => out + p.forward(xin, u0, emb, cells),
+            _ => out,
+        }
     }
 }
 

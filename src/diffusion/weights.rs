@@ -94,7 +94,7 @@ pub fn decode(bytes: &[u8]) -> Result<(WeightsMeta, &[u8])> {
     }
     let m = &meta.model;
     if m.base_width == 0 || m.base_width > 512 || m.mults.iter().any(|&x| x == 0 || x > 8) || m.time_dim < 2 || m.time_dim > 4096
-        || m.emb_dim == 0 || m.emb_dim > 4096 || m.cell_dim == 0 || m.cell_dim > 1024 || m.groups == 0
+        || m.emb_dim == 0 || m.emb_dim > 4096 || m.cell_dim == 0 || m.cell_dim > 1024 || m.groups == 0 || m.point_width > 4096
     {
         return Err(bad("architecture fields are out of range"));
     }
