@@ -13,6 +13,7 @@ mod plotloss;
 mod polycube;
 mod run;
 mod train;
+mod weights;
 
 /// Exit code for bad input (DESIGN.md).
 pub const EXIT_BAD_INPUT: i32 = 2;
@@ -44,6 +45,8 @@ pub enum Command {
     /// Plot a training loss log (loss.csv) as PNGs: whole run, last part, gradient.
     #[command(name = "plot-loss")]
     PlotLoss(plotloss::PlotLossArgs),
+    /// Rewrite a weights file (--half: half precision, the embedded format).
+    Weights(weights::WeightsArgs),
     /// Train the diffusion model (checkpoints every epoch; --resume continues).
     Train(train::TrainArgs),
 }
@@ -67,6 +70,7 @@ pub fn run() -> i32 {
         Command::EvalModel(args) => evalmodel::run(&args).unwrap_or_else(fail),
         Command::Train(args) => train::run(&args).unwrap_or_else(fail),
         Command::PlotLoss(args) => plotloss::run(&args).unwrap_or_else(fail),
+        Command::Weights(args) => weights::run(&args).unwrap_or_else(fail),
     }
 }
 

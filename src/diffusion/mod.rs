@@ -93,6 +93,12 @@ impl Model {
         Ok(weights::encode(&self.meta, &net_bytes(&self.net)?))
     }
 
+    /// The same model as a weights-file image with half-precision parameters.
+    pub fn to_bytes_f16(&self) -> Result<Vec<u8>> {
+        let meta = weights::WeightsMeta { dtype: "f16".into(), ..self.meta.clone() };
+        Ok(weights::encode(&meta, &net_bytes_f16(&self.net)?))
+    }
+
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
         let b = self.to_bytes()?;
         std::fs::write(path, b).map_err(|e| Error::io(path.display(), e))
@@ -101,6 +107,22 @@ impl Model {
     pub fn parameter_count(&self) -> usize {
         self.net.num_params()
     }
+}
+
+/// Parameters of a network as a burnpack byte record in half precision (IEEE
+/// binary16): half the size; loading casts back to f32 (`load_net`).
+pub fn net_bytes_f16(net: &Denoiser) -> Result<Vec<u8>> {
+    use burn::module::{ModuleMapper, Param};
+    use burn::tensor::{FloatDType, Tensor};
+    struct ToF16;
+    impl ModuleMapper for ToF16 {
+        fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
+            param.map(|t| t.cast(FloatDType::F16))
+        }
+    }
+    let half = net.clone().map(&mut ToF16);
+    let b = half.into_record().into_bytes().map_err(|e| Error::Model(format!("cannot serialise the parameters: {e:?}")))?;
+    Ok(b.to_vec())
 }
 
 /// Parameters of a network as a burnpack byte record.
