@@ -134,13 +134,20 @@ pub fn net_bytes(net: &Denoiser) -> Result<Vec<u8>> {
 
 /// Build a network of the given architecture and load a burnpack record into it.
 pub fn load_net(cfg: &ModelConfig, record: &[u8], device: &Device) -> Result<Denoiser> {
+    load_net_with(cfg, record, device, false)
+}
+
+/// As [`load_net`]; `partial` accepts a record without some of the module's
+/// parameters (a warm start of a larger architecture: those keep their
+/// initialisation).
+pub fn load_net_with(cfg: &ModelConfig, record: &[u8], device: &Device, partial: bool) -> Result<Denoiser> {
     let bytes = burn::tensor::Bytes::from_bytes_vec(record.to_vec());
     // Parsing foreign bytes must never take the process down: catch a panic in the decoder.
     let rec = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| burn::store::ModuleRecord::from_bytes(bytes)))
         .map_err(|_| Error::Model("the parameter record is corrupt".into()))?
         .map_err(|e| Error::Model(format!("the parameter record cannot be read: {e:?}")))?;
     let net = Denoiser::new(cfg, device);
-    let rec = rec.cast_to_module_dtype();
+    let rec = rec.cast_to_module_dtype().allow_partial(partial);
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| net.try_load_record(rec)))
         .map_err(|_| Error::Model("the parameter record does not match the architecture".into()))?
         .map_err(|e| Error::Model(format!("the parameter record does not match the architecture: {e:?}")))

@@ -159,7 +159,9 @@ impl PointHead {
             emb: LinearConfig::new(cfg.emb_dim, 2 * pw).init(device),
             cell: LinearConfig::new(cfg.cell_dim, 2 * pw).init(device),
             hid: conv1(pw, pw, device),
-            out: conv1(pw, 3, device),
+            // zero output at initialisation: the head starts as "no correction",
+            // so a warm start from a U-Net without it begins at that U-Net
+            out: Conv2dConfig::new([pw, 3], [1, 1]).with_initializer(burn::nn::Initializer::Zeros).init(device),
             width: pw,
         }
     }

@@ -153,11 +153,20 @@ pub fn train(
         }
         None => {
             let mut c = requested.clone();
+            let mut warm_partial = false;
             let init = match &c.init_from {
                 Some(p) => {
                     let bytes = std::fs::read(p).map_err(io(p))?;
                     let (meta, rec) = super::weights::decode(&bytes)?;
+                    // Warm start of a larger architecture: a point head requested on
+                    // weights without one is added (zero output at first) and trained
+                    // together with the loaded U-Net.
+                    let head = c.model.point_width;
                     c.model = meta.model.clone();
+                    if head > 0 && c.model.point_width == 0 {
+                        c.model.point_width = head;
+                        warm_partial = true;
+                    }
                     c.schedule = meta.schedule.clone();
                     Some((meta, rec.to_vec()))
                 }
@@ -171,7 +180,7 @@ pub fn train(
             let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
             ad.seed(cfg.seed);
             net = match &init {
-                Some((_, rec)) => load_net(&cfg.model, rec, &ad)?,
+                Some((_, rec)) => super::load_net_with(&cfg.model, rec, &ad, warm_partial)?,
                 None => Denoiser::new(&cfg.model, &ad),
             };
             drop(_guard);
