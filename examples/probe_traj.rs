@@ -29,6 +29,11 @@ fn main() {
             let loc = local_points(&active_points(&y, n, 1e-4), frame.scale);
             let lab = ctx.labels[n].label() as usize;
             s += &format!(" cell{n}: own {:.4}", chamfer(&loc, &tpl[lab]));
+            // L-infinity norm of the centred points (cell units): 0.5 on a cube's surface
+            let mut li: Vec<f64> = loc.iter().map(|p| p[0].abs().max(p[1].abs()).max(p[2].abs())).collect();
+            li.sort_by(f64::total_cmp);
+            let q = |f: f64| li[((li.len() - 1) as f64 * f) as usize];
+            s += &format!(" Linf q05 {:.3} q25 {:.3} q50 {:.3} q75 {:.3} q95 {:.3}", q(0.05), q(0.25), q(0.5), q(0.75), q(0.95));
         }
         println!("{s}");
     }
