@@ -42,6 +42,12 @@ pub struct TrainArgs {
     /// Timestep density exponent p: t = 1 + floor(t_max u^p); 1 = uniform.
     #[arg(long)]
     pub t_power: Option<f64>,
+    /// Heavier-tailed noise: probability that a point's noise is scaled by --outlier-scale.
+    #[arg(long)]
+    pub outlier_prob: Option<f64>,
+    /// Scale of the outlier noise (with --outlier-prob).
+    #[arg(long)]
+    pub outlier_scale: Option<f64>,
     /// Fraction of the learning rate left at the last step.
     #[arg(long)]
     pub final_lr: Option<f64>,
@@ -73,6 +79,18 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     }
     if let Some(p) = a.t_power {
         cfg.t_power = p;
+    }
+    if let Some(p) = a.outlier_prob {
+        if !(0.0..=1.0).contains(&p) {
+            return Err(sddpm::Error::InvalidArgument(format!("--outlier-prob must be in [0, 1], got {p}")));
+        }
+        cfg.outlier_prob = p;
+    }
+    if let Some(k) = a.outlier_scale {
+        if !(k.is_finite() && k > 0.0) {
+            return Err(sddpm::Error::InvalidArgument(format!("--outlier-scale must be positive, got {k}")));
+        }
+        cfg.outlier_scale = k;
     }
     if let Some(f) = a.final_lr {
         cfg.final_lr_fraction = f;

@@ -38,6 +38,11 @@ pub struct TrainingInfo {
     /// The weights this run was fine-tuned from (None = seeded initialisation).
     #[serde(default)]
     pub init_from: Option<String>,
+    /// Heavier-tailed training noise (probability, scale); (0, 1) = plain Gaussian.
+    #[serde(default)]
+    pub outlier_prob: f64,
+    #[serde(default = "one")]
+    pub outlier_scale: f64,
 }
 
 fn one() -> f64 {
