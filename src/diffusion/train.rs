@@ -177,7 +177,7 @@ pub fn train(
                         warm_partial = true;
                     }
                     c.schedule = meta.schedule.clone();
-                    Some((meta, rec.to_vec()))
+                    Some(rec.to_vec())
                 }
                 None => None,
             };
@@ -189,7 +189,7 @@ pub fn train(
             let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
             ad.seed(cfg.seed);
             net = match &init {
-                Some((_, rec)) => super::load_net_with(&cfg.model, rec, &ad, warm_partial)?,
+                Some(rec) => super::load_net_with(&cfg.model, rec, &ad, warm_partial)?,
                 None => Denoiser::new(&cfg.model, &ad),
             };
             drop(_guard);
@@ -228,6 +228,7 @@ fn train_loop(
     let sched = Schedule::new(cfg.schedule.clone());
     let bs = cfg.batch_size.max(1);
     let steps_per_epoch = data.len().div_ceil(bs);
+    let t_max = if cfg.t_max == 0 { sched.steps() } else { cfg.t_max.min(sched.steps()) };
     let total_steps = steps_per_epoch * cfg.epochs;
     let (_, _, _, csv) = checkpoint_files(ckdir);
     let mut csv_file = std::fs::OpenOptions::new().append(true).create(true).open(&csv).map_err(io(&csv))?;
@@ -253,7 +254,6 @@ fn train_loop(
                 x0.extend_from_slice(&data[i].tensor);
                 ctx.extend_from_slice(&data[i].context.one_hot());
             }
-            let t_max = if cfg.t_max == 0 { sched.steps() } else { cfg.t_max.min(sched.steps()) };
             let ts: Vec<usize> = (0..b).map(|_| training_timestep(&mut srng, t_max, cfg.t_power)).collect();
             let mut z: Vec<f32> = (0..b * TENSOR_LEN).map(|_| StandardNormal.sample(&mut srng)).collect();
             if cfg.outlier_prob > 0.0 {
