@@ -14,13 +14,26 @@ fn main() {
     let steps: usize = args[3].parse().unwrap();
     let start: usize = args[4].parse().unwrap();
     let mut rng = item_rng(5, 5);
-    let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    // X0CTX=labels: sample the start cloud from another context (label-use check)
+    let x0ctx = std::env::var("X0CTX").ok().map(|c| Context::parse(&c).unwrap()).unwrap_or(ctx.clone());
+    let x0 = layout(&sample_cells(&x0ctx, 1.0, &mut rng));
     let frame = context_frame(&ctx).unwrap();
     let tpl = cached_templates(2048);
     let sched = &model.schedule;
     let keep = if steps == 0 { 10 } else { 1 };
-    let out = reverse_diffusion(&model, &[x0], &[ctx.clone()], &SamplerOptions { steps, start_step: start, keep_every: keep, ..Default::default() }, &mut NoProgress).unwrap();
+    let out = reverse_diffusion(&model, &[x0], &[ctx.clone()], &SamplerOptions { steps, start_step: start, keep_every: keep, guidance: std::env::var("GUIDANCE").ok().map(|v| v.parse().unwrap()).unwrap_or(0.0), eps_scale: std::env::var("EPS_SCALE").ok().map(|v| v.parse().unwrap()).unwrap_or(1.0), ..Default::default() }, &mut NoProgress).unwrap();
     let hw = TENSOR_H * TENSOR_W;
+    // RESTART=t,k,steps: k restarts from the output, forward-noised to t, `steps` steps each
+    let mut out = out;
+    if let Ok(r) = std::env::var("RESTART") {
+        let v: Vec<usize> = r.split(',').map(|x| x.parse().unwrap()).collect();
+        for k in 0..v[1] {
+            let x = out.tensors[0].clone();
+            let o2 = reverse_diffusion(&model, &[x], &[ctx.clone()], &SamplerOptions { steps: v[2], start_step: v[0], keep_every: 0, seed: 100 + k as u64, ..Default::default() }, &mut NoProgress).unwrap();
+            out.trajectory[0].push((0, o2.tensors[0].clone()));
+            out.tensors = o2.tensors;
+        }
+    }
     for (t, x) in &out.trajectory[0] {
         let sa = sched.alpha_bar[*t].sqrt();
         let y: Vec<f32> = x.iter().enumerate().map(|(k, v)| ((*v as f64 - sched.qcoef[*t] * sched.config.q[k / hw]) / sa) as f32).collect();

@@ -122,6 +122,90 @@ fn half_precision_weights_are_half_the_size_and_predict_the_same_noise() {
     assert!(max < 1e-2, "max difference {max}");
 }
 
+#[test]
+fn template_prior_is_the_fixed_seed_sample_and_its_warm_start_changes_nothing() {
+    use sddpm::diffusion::model::{prior_image, PRIOR_SEED};
+    // the prior of a context is the x_0 layout of a fixed-seed sample of it
+    let ctx = Context::parse("cube,THC+Z,0,0,0,0,BHC-Y,0,0,0,0,0").unwrap();
+    let mut rng = item_rng(PRIOR_SEED, 0);
+    assert_eq!(prior_image(&ctx.one_hot()), layout(&sample_cells(&ctx, 1.0, &mut rng)));
+    // withheld labels: those blocks are zero, the frame (occupied box) is unchanged
+    let un = prior_image(&ctx.one_hot_unlabelled());
+    assert!(un.iter().all(|&v| v == 0.0));
+    let mut part = ctx.one_hot();
+    part[..11].iter_mut().for_each(|v| *v = 0.0); // cell 0's label withheld
+    let p = prior_image(&part);
+    let full = prior_image(&ctx.one_hot());
+    use sddpm::polycube::tensor::{flat, slot};
+    for pt in 0..512 {
+        let (r, c) = slot(0, pt);
+        assert_eq!(p[flat(0, r, c)], 0.0);
+        let (r, c) = slot(1, pt);
+        assert_eq!(p[flat(2, r, c)], full[flat(2, r, c)]);
+    }
+    // the prior's input convolution starts at zero: the same weights loaded into the
+    // architecture with the prior predict the same noise
+    let dir = tempdir("prior");
+    let m = tiny_model(&dir);
+    let mut cfg = m.meta.model.clone();
+    cfg.prior = true;
+    let rec = sddpm::diffusion::net_bytes(&m.net).unwrap();
+    let with = sddpm::diffusion::load_net_with(&cfg, &rec, &m.device, true).unwrap();
+    let mut rng = item_rng(9, 9);
+    let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    use burn::tensor::{Tensor, TensorData};
+    let run = |net: &sddpm::diffusion::model::Denoiser| -> Vec<f32> {
+        let xt = Tensor::<4>::from_data(TensorData::new(x.clone(), [1, 3, 64, 96]), &m.device);
+        let ct = Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &m.device);
+        net.forward(xt, &[50], ct).into_data().try_into_vec::<f32>().unwrap()
+    };
+    assert_eq!(run(&m.net), run(&with));
+}
+
+#[test]
+fn guidance_combines_the_conditional_and_unlabelled_predictions() {
+    use burn::tensor::{Tensor, TensorData};
+    let dir = tempdir("guidance");
+    let m = tiny_model(&dir);
+    let ctx = Context::parse("THC+X,cube,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mut rng = item_rng(2, 2);
+    let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    let t = 30;
+    // one strided step from the raw input at t straight to 0 with weight w ...
+    let w = 2.5;
+    let opts = SamplerOptions { steps: 1, start_step: t, raw_start: true, guidance: w, ..Default::default() };
+    let got = reverse_diffusion(&m, &[x.clone()], &[ctx], &opts, &mut NoProgress).unwrap().tensors.remove(0);
+    // ... is the DDIM step with e_c + w (e_c - e_u)
+    let eps = |oh: [f32; 132]| -> Vec<f32> {
+        let xt = Tensor::<4>::from_data(TensorData::new(x.clone(), [1, 3, 64, 96]), &m.device);
+        let ct = Tensor::<2>::from_data(TensorData::new(oh.to_vec(), [1, 132]), &m.device);
+        m.net.forward(xt, &[t], ct).into_data().try_into_vec::<f32>().unwrap()
+    };
+    let (ec, eu) = (eps(ctx.one_hot()), eps(ctx.one_hot_unlabelled()));
+    assert!(max_abs_diff(&ec, &eu) > 0.0, "the unlabelled context must change the prediction");
+    let e: Vec<f32> = ec.iter().zip(&eu).map(|(c, u)| c + w as f32 * (c - u)).collect();
+    let mut want = vec![0f32; x.len()];
+    m.schedule.ddim_step(&x, &e, t, 0, &mut want);
+    use sddpm::polycube::tensor::{flat, slot};
+    for n in ctx.occupied() {
+        for p in 0..512 {
+            let (r, c) = slot(n, p);
+            for ch in 0..3 {
+                let k = flat(ch, r, c);
+                // the batched (2-item) and single-item forward passes sum in different orders
+                assert!((got[k] - want[k]).abs() < 1e-4, "cell {n} point {p}: {} vs {}", got[k], want[k]);
+            }
+        }
+    }
+    // w = 0 is the plain sampler
+    let plain = SamplerOptions { steps: 1, start_step: t, raw_start: true, ..Default::default() };
+    let zero = SamplerOptions { guidance: 0.0, ..plain.clone() };
+    assert_eq!(
+        reverse_diffusion(&m, &[x.clone()], &[ctx], &plain, &mut NoProgress).unwrap().tensors,
+        reverse_diffusion(&m, &[x], &[ctx], &zero, &mut NoProgress).unwrap().tensors
+    );
+}
+
 #[cfg(feature = "ndarray")]
 #[test]
 fn flex_and_ndarray_agree_on_the_same_weights() {

@@ -48,6 +48,15 @@ pub struct TrainArgs {
     /// Scale of the outlier noise (with --outlier-prob).
     #[arg(long)]
     pub outlier_scale: Option<f64>,
+    /// Template prior input (ModelConfig::prior); with --init-from on weights without it, a warm start.
+    #[arg(long)]
+    pub prior: bool,
+    /// Label dropout probability (classifier-free guidance; see TrainConfig::label_dropout).
+    #[arg(long)]
+    pub label_dropout: Option<f64>,
+    /// Linear learning-rate warm-up over the first N steps (for --init-from).
+    #[arg(long)]
+    pub warmup: Option<usize>,
     /// Fraction of the learning rate left at the last step.
     #[arg(long)]
     pub final_lr: Option<f64>,
@@ -85,6 +94,18 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
             return Err(sddpm::Error::InvalidArgument(format!("--outlier-prob must be in [0, 1], got {p}")));
         }
         cfg.outlier_prob = p;
+    }
+    if let Some(w) = a.warmup {
+        cfg.warmup_steps = w;
+    }
+    if a.prior {
+        cfg.model.prior = true;
+    }
+    if let Some(p) = a.label_dropout {
+        if !(0.0..1.0).contains(&p) {
+            return Err(sddpm::Error::InvalidArgument(format!("--label-dropout must be in [0, 1), got {p}")));
+        }
+        cfg.label_dropout = p;
     }
     if let Some(k) = a.outlier_scale {
         if !(k.is_finite() && k > 0.0) {

@@ -131,6 +131,18 @@ impl Context {
         v
     }
 
+    /// The 132-vector with the labels withheld: null cells keep their null entry,
+    /// every occupied cell's row is all zeros ("occupied, label unknown"). The
+    /// unconditional input of classifier-free guidance (label dropout in training,
+    /// `SamplerOptions::guidance` in sampling).
+    pub fn one_hot_unlabelled(&self) -> [f32; CONTEXT_DIM] {
+        let mut v = self.one_hot();
+        for n in self.occupied() {
+            v[n * NUM_LABELS..(n + 1) * NUM_LABELS].iter_mut().for_each(|x| *x = 0.0);
+        }
+        v
+    }
+
     pub fn label_values(&self) -> [u8; NUM_CELLS] {
         self.labels.map(|p| p.label())
     }
@@ -432,6 +444,23 @@ mod tests {
         // a fixed total keeps the search within the bound
         let k = Constraints { cube: Some(2), thc: Some(0), bhc: Some(0), ..Default::default() };
         assert!(!k.enumerate().unwrap().is_empty());
+    }
+
+    #[test]
+    fn unlabelled_one_hot_keeps_null_cells_and_withholds_labels() {
+        let c = Context::parse("cube,THC+Z,0,0,0,0,BHC-Y,0,0,0,0,0").unwrap();
+        let u = c.one_hot_unlabelled();
+        for n in 0..NUM_CELLS {
+            let row = &u[n * NUM_LABELS..(n + 1) * NUM_LABELS];
+            if c.labels[n] == Primitive::Null {
+                assert_eq!(row[0], 1.0);
+                assert_eq!(row.iter().sum::<f32>(), 1.0);
+            } else {
+                assert!(row.iter().all(|&v| v == 0.0), "cell {n}");
+            }
+        }
+        // not a valid context (occupied cells have no label), by design
+        assert!(Context::from_one_hot(&u).is_err());
     }
 
     #[test]

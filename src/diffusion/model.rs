@@ -48,11 +48,20 @@ pub struct ModelConfig {
     /// layout's neighbours, which are not spatial neighbours, represent poorly.
     #[serde(default)]
     pub point_width: usize,
+    /// Template prior input: a fixed-seed sample of the context's primitives, laid out
+    /// exactly like x_0 ([`prior_image`]), enters through its own 3x3 convolution added
+    /// to the input convolution. The label of a cell then reaches the network as the
+    /// shape it stands for, pixel by pixel in the sorted layout, instead of only
+    /// through the modulations: a network with only those was measured to ignore the
+    /// primitive label entirely (BENCHMARKS.md, "Where the error is"). The convolution
+    /// starts at zero, so a warm start from weights without it begins at those weights.
+    #[serde(default)]
+    pub prior: bool,
 }
 
 impl Default for ModelConfig {
     fn default() -> Self {
-        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0 }
+        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0, prior: false }
     }
 }
 
@@ -204,6 +213,7 @@ pub struct Denoiser {
     norm_out: GroupNorm,
     conv_out: Conv2d,
     point: Option<PointHead>,
+    prior_in: Option<Conv2d>,
     time_dim: usize,
     cell_dim: usize,
 }
@@ -233,6 +243,12 @@ impl Denoiser {
             norm_out: group_norm(cfg.groups, c0, device),
             conv_out: conv3(c0, 3, 1, device),
             point: (cfg.point_width > 0).then(|| PointHead::new(c0, cfg, device)),
+            prior_in: cfg.prior.then(|| {
+                Conv2dConfig::new([3, c0], [3, 3])
+                    .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                    .with_initializer(burn::nn::Initializer::Zeros)
+                    .init(device)
+            }),
             time_dim: cfg.time_dim,
             cell_dim: cfg.cell_dim,
         }
@@ -247,12 +263,19 @@ impl Denoiser {
         let temb = self.time2.forward(silu(self.time1.forward(temb)));
         let cemb = self.ctx2.forward(silu(self.ctx1.forward(ctx.clone())));
         let emb = silu(temb + cemb);
+        let ctx_in = if self.prior_in.is_some() { Some(ctx.clone()) } else { None };
         let cells = self.cell2.forward(silu(self.cell1.forward(ctx))).reshape([b, NUM_CELLS, self.cell_dim]);
 
         let coords = Tensor::<4>::from_data(TensorData::new(coordinate_channels(), [1, 2, h, w]), &device).expand([b, 2, h, w]);
         let x = Tensor::cat(vec![x, coords], 1);
         let xin = self.point.as_ref().map(|_| x.clone());
-        let h0 = self.conv_in.forward(x);
+        let mut h0 = self.conv_in.forward(x);
+        if let Some(p) = &self.prior_in {
+            let oh: Vec<f32> = ctx_data(&ctx_in);
+            let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
+            let pt = Tensor::<4>::from_data(TensorData::new(img, [b, 3, h, w]), &device);
+            h0 = h0 + p.forward(pt);
+        }
         let h0 = self.enc0.forward(h0, emb.clone(), cells.clone());
         let h1 = self.down0.forward(h0.clone());
         let h1 = self.enc1.forward(h1, emb.clone(), cells.clone());
@@ -269,6 +292,44 @@ impl Denoiser {
             _ => out,
         }
     }
+}
+
+fn ctx_data(ctx: &Option<Tensor<2>>) -> Vec<f32> {
+    ctx.as_ref().map(|c| c.clone().into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default()).unwrap_or_default()
+}
+
+/// Seed of the template prior's samples (fixed: the prior is a function of the context).
+pub const PRIOR_SEED: u64 = 0x5052_494f_52;
+
+/// The template prior of one 132-vector: [3, 64, 96] laid out like x_0, each occupied
+/// cell holding 512 points of its primitive sampled with a fixed seed (scale 1, sorted);
+/// null cells and occupied cells whose label is withheld (an all-zero row, see
+/// `Context::one_hot_unlabelled`) hold zeros. The occupied box, hence the frame, counts
+/// withheld cells as occupied.
+pub fn prior_image(one_hot: &[f32]) -> Vec<f32> {
+    use crate::polycube::Primitive;
+    let nl = CONTEXT_DIM / NUM_CELLS;
+    let mut labels = [Primitive::Null; NUM_CELLS];
+    let mut withheld = [false; NUM_CELLS];
+    for n in 0..NUM_CELLS {
+        let row = &one_hot[n * nl..(n + 1) * nl];
+        match row.iter().position(|&v| v > 0.5) {
+            Some(l) => labels[n] = Primitive::from_label(l as u8).unwrap_or(Primitive::Null),
+            None => {
+                labels[n] = Primitive::Cube;
+                withheld[n] = true;
+            }
+        }
+    }
+    let ctx = crate::context::Context { labels };
+    let mut rng = crate::polycube::dataset::item_rng(PRIOR_SEED, 0);
+    let mut cells = crate::polycube::dataset::sample_cells(&ctx, 1.0, &mut rng);
+    for n in 0..NUM_CELLS {
+        if withheld[n] {
+            cells[n].clear();
+        }
+    }
+    crate::polycube::tensor::layout(&cells)
 }
 
 /// Sinusoidal encoding of integer timesteps, [B * dim] row-major.

@@ -54,6 +54,17 @@ pub struct SamplerOptions {
     /// The data of every occupied cell lie in that cell, as image diffusion clips x_0
     /// to the pixel range.
     pub clip_margin: f64,
+    /// Factor applied to every predicted noise before the step (1 = off). Values
+    /// below 1 counter a network whose noise estimates are too large along the
+    /// reverse trajectory ("epsilon scaling" against exposure bias); BENCHMARKS.md
+    /// records the sweep.
+    pub eps_scale: f64,
+    /// Classifier-free guidance weight w: the noise is predicted under the context
+    /// and under its "labels unknown" form (every occupied cell's one-hot row zeroed,
+    /// null cells kept; see `Context::one_hot_unlabelled`) and combined as
+    /// e_c + w (e_c - e_u). 0 = off (one network call per step); w > 0 doubles the
+    /// work per step. Meaningful for weights trained with label dropout.
+    pub guidance: f64,
 }
 
 impl Default for SamplerOptions {
@@ -68,6 +79,8 @@ impl Default for SamplerOptions {
             refine_passes: DEFAULT_REFINE_PASSES,
             refine_t: DEFAULT_REFINE_T,
             clip_margin: DEFAULT_CLIP_MARGIN,
+            eps_scale: 1.0,
+            guidance: 0.0,
         }
     }
 }
@@ -170,7 +183,13 @@ pub fn reverse_diffusion(
             }
         }
         let ctx: Vec<f32> = contexts[start..end].iter().flat_map(|c| c.one_hot()).collect();
-        let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx, [b, CONTEXT_DIM]), &model.device);
+        let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx.clone(), [b, CONTEXT_DIM]), &model.device);
+        // guidance: one batch of 2b, conditional first, "labels unknown" second
+        let ctx_g = (opts.guidance != 0.0).then(|| {
+            let mut both = ctx;
+            both.extend(contexts[start..end].iter().flat_map(|c| c.one_hot_unlabelled()));
+            Tensor::<2>::from_data(TensorData::new(both, [2 * b, CONTEXT_DIM]), &model.device)
+        });
         if opts.keep_every > 0 {
             for i in 0..b {
                 out.trajectory[start + i].push((t_start, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
@@ -180,12 +199,25 @@ pub fn reverse_diffusion(
         let mut z = vec![0f32; TENSOR_LEN];
         for (si, &t) in ts.iter().enumerate() {
             check_progress(progress, calls as f64 / total_calls as f64, "reverse diffusion")?;
-            let xt = Tensor::<4>::from_data(TensorData::new(x.clone(), [b, 3, TENSOR_H, TENSOR_W]), &model.device);
-            let eps = model.net.forward(xt, &vec![t; b], ctx_t.clone());
-            let eps: Vec<f32> = eps
+            let (xin, bb, ct) = match &ctx_g {
+                Some(g) => ([x.clone(), x.clone()].concat(), 2 * b, g.clone()),
+                None => (x.clone(), b, ctx_t.clone()),
+            };
+            let xt = Tensor::<4>::from_data(TensorData::new(xin, [bb, 3, TENSOR_H, TENSOR_W]), &model.device);
+            let eps = model.net.forward(xt, &vec![t; bb], ct);
+            let mut eps: Vec<f32> = eps
                 .into_data()
                 .try_into_vec::<f32>()
                 .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
+            if ctx_g.is_some() {
+                let w = opts.guidance as f32;
+                let (c, u) = eps.split_at(b * TENSOR_LEN);
+                eps = c.iter().zip(u).map(|(c, u)| c + w * (c - u)).collect();
+            }
+            if opts.eps_scale != 1.0 {
+                let f = opts.eps_scale as f32;
+                eps.iter_mut().for_each(|v| *v *= f);
+            }
             let s = ts.get(si + 1).copied().unwrap_or(0);
             for i in 0..b {
                 let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;

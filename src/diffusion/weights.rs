@@ -43,6 +43,9 @@ pub struct TrainingInfo {
     pub outlier_prob: f64,
     #[serde(default = "one")]
     pub outlier_scale: f64,
+    /// Label dropout (classifier-free guidance training); 0 = off.
+    #[serde(default)]
+    pub label_dropout: f64,
 }
 
 fn one() -> f64 {
