@@ -153,7 +153,7 @@ typedef struct sddpm_hex_options {
   uint32_t optimise_passes;
   // Optimisation works on elements below this scaled Jacobian (default 0.8).
   double optimise_target;
-  // Verified candidates meshed; the best mesh is kept (default 2).
+  // Candidates meshed (verified ones, else diffused ones by fit); the best mesh is kept (default 4).
   uint32_t hex_candidates;
   // Mesh the best-fitting diffused candidate when none passed verification (default true).
   bool accept_unverified;
@@ -421,8 +421,9 @@ sddpm_status sddpm_hex_options_default(struct sddpm_hex_options *out);
 // Build the all-hex mesh of a polycube result: the best of its verified candidates
 // (up to `hex_candidates`, best score first; fewest inverted elements, then highest
 // minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
-// the best-fitting diffused one when `accept_unverified` (the quality reports
-// `verified_polycube` false), else the polycube's VERIFICATION_FAILED.
+// the best of up to `hex_candidates` diffused ones, best geometric fit first, when
+// `accept_unverified` (the quality reports `verified_polycube` false), else the
+// polycube's VERIFICATION_FAILED.
 //
 // # Safety
 // `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a

@@ -110,10 +110,14 @@ pub struct RunOptions {
     /// inverted elements after quality improvement, instead of returning it with
     /// them counted in the report (default false).
     pub require_valid_hex: bool,
-    /// How many verified candidates (best score first) are meshed; the one whose hex
-    /// mesh has the fewest inverted elements, then the highest minimum scaled Jacobian,
-    /// is kept (default 2: a second candidate costs one more hex build and often
-    /// rescues an orientation whose map folds).
+    /// How many candidates are meshed: the verified ones best score first or, when
+    /// none verified, the diffused ones best geometric fit first
+    /// ([`fallback_candidates`]). The hex mesh with the fewest inverted elements, then
+    /// the highest minimum scaled Jacobian, is kept; the builds stop at the first mesh
+    /// with no inverted element and a minimum scaled Jacobian of at least 0.3.
+    /// Default 4: a further candidate costs one more hex build (2-6 s at level 2),
+    /// spent only while the meshes so far are not good enough; BENCHMARKS.md ("Main
+    /// job") measures what it rescues.
     pub hex_candidates: usize,
 }
 
@@ -126,7 +130,7 @@ impl Default for RunOptions {
             spline: Some(SplineOptions::default()),
             accept_unverified: true,
             require_valid_hex: false,
-            hex_candidates: 2,
+            hex_candidates: 4,
         }
     }
 }
@@ -215,16 +219,12 @@ pub fn run(
         if !(opts.accept_unverified && matches!(e, Error::VerificationFailed(_))) {
             return Err(e);
         }
-        let i = match fallback_candidate(&pr) {
-            Some(i) => i,
-            None => {
-                // nothing was diffused (every candidate refused by the pre-check): lay
-                // out the best-fitting one without diffusion (the hex stage then works
-                // from the geometry alone)
-                prepare_fallback(&mut pr, mesh, &opts.polycube, genus).ok_or(e)?
-            }
-        };
-        order = vec![i];
+        // the diffused candidates by fit, then refused ones laid out without
+        // diffusion (the hex stage then works from the geometry alone)
+        order = fallback_order(&mut pr, mesh, &opts.polycube, genus, opts.hex_candidates.max(1));
+        if order.is_empty() {
+            return Err(e);
+        }
         hex_opts.use_correspondence = false;
     } else {
         order = ranked_verified(&pr);
@@ -273,16 +273,24 @@ pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
     order
 }
 
-/// The diffused candidate to mesh when none passed verification: GOCC passes first,
-/// then the best geometric fit of the input to the polycube.
-pub fn fallback_candidate(pr: &PolycubeResult) -> Option<usize> {
+/// The diffused candidates to mesh when none passed verification, best first: those
+/// that passed GOCC before those that failed it, then by the geometric fit of the
+/// input to the polycube.
+pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
     use crate::context::generate::Stage;
-    (0..pr.candidates.len())
+    let mut v: Vec<usize> = (0..pr.candidates.len())
         .filter(|&i| pr.candidates[i].input.is_some() && matches!(pr.candidates[i].stage, Stage::Tcv | Stage::Gocc | Stage::Verified))
-        .min_by(|&a, &b| {
-            let (ca, cb) = (&pr.candidates[a], &pr.candidates[b]);
-            ((ca.stage == Stage::Gocc) as u8, ca.fit).partial_cmp(&((cb.stage == Stage::Gocc) as u8, cb.fit)).unwrap_or(std::cmp::Ordering::Equal)
-        })
+        .collect();
+    v.sort_by(|&a, &b| {
+        let (ca, cb) = (&pr.candidates[a], &pr.candidates[b]);
+        ((ca.stage == Stage::Gocc) as u8, ca.fit).partial_cmp(&((cb.stage == Stage::Gocc) as u8, cb.fit)).unwrap_or(std::cmp::Ordering::Equal)
+    });
+    v
+}
+
+/// The first of [`fallback_candidates`].
+pub fn fallback_candidate(pr: &PolycubeResult) -> Option<usize> {
+    fallback_candidates(pr).first().copied()
 }
 
 /// When the pre-check refused every candidate: give the best-fitting candidate of the
@@ -292,14 +300,91 @@ pub fn prepare_fallback(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &Polycube
     let best = (0..pr.candidates.len())
         .filter(|&i| pr.candidates[i].context.validity().genus == Some(genus))
         .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit))?;
-    if pr.candidates[best].input.is_none() {
-        let input = crate::context::generate::prepare_input(mesh, opts).ok()?;
-        let c = &pr.candidates[best];
-        let mut rng = crate::polycube::dataset::item_rng(opts.seed ^ 0x9e37, 0xfa11);
-        let inp = crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng).ok()?;
-        pr.candidates[best].input = Some(inp);
+    prepare_candidate_input(pr, mesh, opts, best).then_some(best)
+}
+
+/// Lay out candidate `i`'s inference input without diffusion when it has none
+/// (refused by the pre-check); false when that fails.
+fn prepare_candidate_input(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, i: usize) -> bool {
+    if pr.candidates[i].input.is_some() {
+        return true;
     }
-    Some(best)
+    let Ok(input) = crate::context::generate::prepare_input(mesh, opts) else { return false };
+    let c = &pr.candidates[i];
+    let mut rng = crate::polycube::dataset::item_rng(opts.seed ^ 0x9e37, 0xfa11);
+    match crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
+        Ok(inp) => {
+            pr.candidates[i].input = Some(inp);
+            true
+        }
+        Err(_) => false,
+    }
+}
+
+/// Up to `k` candidates to mesh when none passed verification, best first: the
+/// diffused ones ([`fallback_candidates`]), then the candidates of the input's genus
+/// that the pre-check refused, by geometric fit, laid out without diffusion. The hex
+/// stage does not use the diffusion output of an unverified candidate, so a refused
+/// candidate is as good a start as a diffused one; this lets a plain shape whose fit
+/// the pre-check judged poor (a cube where the fit preferred a blind hole) still be
+/// meshed when the better-fitting ones fold.
+pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, genus: i64, k: usize) -> Vec<usize> {
+    use crate::polycube::Primitive;
+    let all_cube = |c: &crate::context::Context| c.occupied().all(|n| c.labels[n] == Primitive::Cube);
+    // a genus-0 input without an all-cube candidate keeps one slot for it (below)
+    let cube_slot = genus == 0 && k > 1 && !pr.candidates.iter().any(|c| all_cube(&c.context));
+    let room = if cube_slot { k - 1 } else { k };
+    let mut order = fallback_candidates(pr);
+    order.truncate(room);
+    if order.len() < room {
+        let mut rest: Vec<usize> = (0..pr.candidates.len())
+            .filter(|&i| pr.candidates[i].input.is_none() && pr.candidates[i].context.validity().genus == Some(genus))
+            .collect();
+        rest.sort_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit));
+        for i in rest {
+            if order.len() >= room {
+                break;
+            }
+            if prepare_candidate_input(pr, mesh, opts, i) {
+                order.push(i);
+            }
+        }
+    }
+    // a genus-0 input can always start from plain cubes: when no candidate is all
+    // cubes, the best-fitting candidate's cells relabelled as cubes is the last resort
+    // (the automated mode keeps only the best-fitting labels per subregion, which for
+    // a block with a recess are all blind holes)
+    if cube_slot {
+        let best = (0..pr.candidates.len())
+            .filter(|&i| pr.candidates[i].context.validity().genus == Some(0))
+            .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit));
+        if let Some(b) = best {
+            let mut c = pr.candidates[b].clone();
+            for n in 0..crate::polycube::NUM_CELLS {
+                if c.context.labels[n] != Primitive::Null {
+                    c.context.labels[n] = Primitive::Cube;
+                }
+            }
+            if c.context.validity().genus == Some(0) {
+                c.labels = c.context.label_values();
+                c.fit = f64::INFINITY; // not measured
+                c.stage = crate::context::generate::Stage::Occupancy;
+                c.report = None;
+                c.fidelity = None;
+                c.score = None;
+                c.input = None;
+                c.output = None;
+                pr.candidates.push(c);
+                let i = pr.candidates.len() - 1;
+                if prepare_candidate_input(pr, mesh, opts, i) {
+                    order.push(i);
+                } else {
+                    pr.candidates.pop();
+                }
+            }
+        }
+    }
+    order
 }
 
 /// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh:

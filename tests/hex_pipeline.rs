@@ -194,3 +194,28 @@ fn correspondence_seed_is_used_and_harmless() {
     assert_eq!(r.quality.inverted, 0);
     assert_never_worse(&r);
 }
+
+/// The main job on a genus-0 input whose only candidate is a blind hole (user-guided,
+/// unverified): the fallback also meshes the same cells as plain cubes, and keeps the
+/// valid mesh. (A box input: the blind hole has nothing to map to and folds or fits
+/// worse; the cube block maps to it exactly.)
+#[test]
+fn an_unverified_genus_0_job_also_tries_plain_cubes() {
+    use sddpm::pipeline::{run, ContextRequest, RunOptions};
+    let ctx = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    // a 2 x 1 x 1 box, its faces split so the input has interior vertices
+    let mesh = polycube_surface(&ctx, 4, |p| [2.0 * p[0], p[1], p[2]]);
+    let model = sddpm::diffusion::Model::default_model().unwrap();
+    let req = ContextRequest::Contexts(vec![Context::parse("BHC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()]);
+    let mut o = RunOptions { spline: None, ..Default::default() };
+    o.polycube.sampler.steps = 5;
+    o.hex.level = Some(1);
+    let r = run(&model, &mesh, 0, &req, &o, &mut NoProgress).unwrap();
+    assert!(!r.verified);
+    let names: Vec<String> = r.polycube.candidates.iter().map(|c| c.context.names()).collect();
+    assert!(names.iter().any(|n| n.starts_with("cube,")), "no plain-cube candidate among {names:?}");
+    assert_eq!(r.hex.quality.inverted, 0, "attempts: {:?}", r.hex_attempts);
+    // the kept mesh is the best of the attempts: fewest inverted, then highest minimum
+    let best = r.hex_attempts.iter().map(|a| (a.inverted, -a.min_scaled_jacobian)).min_by(|a, b| a.partial_cmp(b).unwrap()).unwrap();
+    assert_eq!((r.hex.quality.inverted, -r.hex.quality.min), best);
+}

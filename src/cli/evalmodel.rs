@@ -35,6 +35,9 @@ pub struct EvalArgs {
     /// Reverse diffusion starts at this step from the forward-noised input (0 = T).
     #[arg(long)]
     pub start_step: Option<usize>,
+    /// Classifier-free guidance weight (SamplerOptions::guidance; 0 = off).
+    #[arg(long)]
+    pub guidance: Option<f64>,
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
     pub sweep: bool,
@@ -51,6 +54,9 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     }
     if let Some(t) = a.start_step {
         opts.sampler.start_step = t;
+    }
+    if let Some(w) = a.guidance {
+        opts.sampler.guidance = w;
     }
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;

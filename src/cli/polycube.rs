@@ -39,6 +39,9 @@ pub struct PolycubeArgs {
     /// Reverse diffusion starts at this step from the forward-noised input (0 = T; default: the library's default).
     #[arg(long)]
     pub start_step: Option<usize>,
+    /// Classifier-free guidance weight (0 = off; default: the library's default).
+    #[arg(long)]
+    pub guidance: Option<f64>,
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
@@ -74,6 +77,9 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     }
     if let Some(s) = a.start_step {
         o.sampler.start_step = s;
+    }
+    if let Some(w) = a.guidance {
+        o.sampler.guidance = w;
     }
     o
 }

@@ -7,7 +7,7 @@ use crate::error::{Error, Result, Status};
 use crate::hex::quality::{element_qualities, summarize};
 use crate::hex::{HexMesh, HexOptions, HexResult};
 use crate::mesh::TriMesh;
-use crate::pipeline::{build_hex_for_polycube, fallback_candidate, prepare_fallback, ranked_verified, RunOptions};
+use crate::pipeline::{build_hex_for_polycube, fallback_order, ranked_verified, RunOptions};
 use std::ffi::{c_char, c_void};
 
 /// An opaque all-hex mesh with its quality; not thread-safe to free while in use,
@@ -44,7 +44,7 @@ pub struct SddpmHexOptions {
     pub optimise_passes: u32,
     /// Optimisation works on elements below this scaled Jacobian (default 0.8).
     pub optimise_target: f64,
-    /// Verified candidates meshed; the best mesh is kept (default 2).
+    /// Candidates meshed (verified ones, else diffused ones by fit); the best mesh is kept (default 4).
     pub hex_candidates: u32,
     /// Mesh the best-fitting diffused candidate when none passed verification (default true).
     pub accept_unverified: bool,
@@ -149,8 +149,9 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
 /// Build the all-hex mesh of a polycube result: the best of its verified candidates
 /// (up to `hex_candidates`, best score first; fewest inverted elements, then highest
 /// minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
-/// the best-fitting diffused one when `accept_unverified` (the quality reports
-/// `verified_polycube` false), else the polycube's VERIFICATION_FAILED.
+/// the best of up to `hex_candidates` diffused ones, best geometric fit first, when
+/// `accept_unverified` (the quality reports `verified_polycube` false), else the
+/// polycube's VERIFICATION_FAILED.
 ///
 /// # Safety
 /// `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a
@@ -179,15 +180,13 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
                 return Err(refusal());
             }
             hopts.use_correspondence = false;
-            match fallback_candidate(&pc.result) {
-                Some(i) => (vec![i], false),
-                None => {
-                    let r = result.to_mut();
-                    let genus = r.input_genus;
-                    let i = prepare_fallback(r, &pc.mesh, &pc.options, genus).ok_or_else(refusal)?;
-                    (vec![i], false)
-                }
+            let r = result.to_mut();
+            let genus = r.input_genus;
+            let o = fallback_order(r, &pc.mesh, &pc.options, genus, n);
+            if o.is_empty() {
+                return Err(refusal());
             }
+            (o, false)
         };
         let mut p = CProgress { callback: progress, user_data };
         let (_, _, r) = build_hex_for_polycube(&result, &order, &pc.mesh, &hopts, &mut p)?;
