@@ -21,7 +21,7 @@ pub struct RunArgs {
     /// best-fitting unverified one, and when the hex mesh keeps inverted elements.
     #[arg(long)]
     pub strict: bool,
-    /// How many verified candidates are meshed; the best mesh is kept.
+    /// How many candidates are meshed (verified ones, else unverified ones by fit); the best mesh is kept (default 4).
     #[arg(long)]
     pub hex_candidates: Option<usize>,
 }
