@@ -111,11 +111,11 @@ pub struct RunOptions {
     /// them counted in the report (default false).
     pub require_valid_hex: bool,
     /// How many candidates are meshed: the verified ones best score first or, when
-    /// none verified, the diffused ones best geometric fit first
-    /// ([`fallback_candidates`]). The hex mesh with the fewest inverted elements, then
+    /// none verified, the unverified ones of [`fallback_order`]. The hex mesh with the fewest inverted elements, then
     /// the highest minimum scaled Jacobian, is kept; the builds stop at the first mesh
     /// with no inverted element and a minimum scaled Jacobian of at least 0.3.
-    /// Default 4: a further candidate costs one more hex build (2-6 s at level 2),
+    /// Default 4: a further candidate costs one more hex build (1.8-6.9 s at level 2
+    /// in BENCHMARKS.md's hex table 1),
     /// spent only while the meshes so far are not good enough; BENCHMARKS.md ("Main
     /// job") measures what it rescues.
     pub hex_candidates: usize,
@@ -288,28 +288,24 @@ pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
     v
 }
 
-/// The first of [`fallback_candidates`].
-pub fn fallback_candidate(pr: &PolycubeResult) -> Option<usize> {
-    fallback_candidates(pr).first().copied()
-}
-
-/// When the pre-check refused every candidate: give the best-fitting candidate of the
-/// input's genus its inference input (the map of the input into the polycube's box),
-/// without diffusion, and return its index; None when there is no such candidate.
-pub fn prepare_fallback(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, genus: i64) -> Option<usize> {
-    let best = (0..pr.candidates.len())
-        .filter(|&i| pr.candidates[i].context.validity().genus == Some(genus))
-        .min_by(|&a, &b| pr.candidates[a].fit.total_cmp(&pr.candidates[b].fit))?;
-    prepare_candidate_input(pr, mesh, opts, best).then_some(best)
-}
-
 /// Lay out candidate `i`'s inference input without diffusion when it has none
-/// (refused by the pre-check); false when that fails.
-fn prepare_candidate_input(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, i: usize) -> bool {
+/// (refused by the pre-check); false when that fails. `prepared` holds the aligned,
+/// sampled input, computed on the first call and shared by the later ones.
+fn prepare_candidate_input(
+    pr: &mut PolycubeResult,
+    prepared: &mut Option<crate::context::generate::PreparedInput>,
+    mesh: &TriMesh,
+    opts: &PolycubeOptions,
+    i: usize,
+) -> bool {
     if pr.candidates[i].input.is_some() {
         return true;
     }
-    let Ok(input) = crate::context::generate::prepare_input(mesh, opts) else { return false };
+    if prepared.is_none() {
+        let Ok(p) = crate::context::generate::prepare_input(mesh, opts) else { return false };
+        *prepared = Some(p);
+    }
+    let Some(input) = prepared.as_ref() else { return false };
     let c = &pr.candidates[i];
     let mut rng = crate::polycube::dataset::item_rng(opts.seed ^ 0x9e37, 0xfa11);
     match crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
@@ -334,6 +330,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
     // a genus-0 input without an all-cube candidate keeps one slot for it (below)
     let cube_slot = genus == 0 && k > 1 && !pr.candidates.iter().any(|c| all_cube(&c.context));
     let room = if cube_slot { k - 1 } else { k };
+    let mut prepared = None;
     let mut order = fallback_candidates(pr);
     order.truncate(room);
     if order.len() < room {
@@ -345,7 +342,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
             if order.len() >= room {
                 break;
             }
-            if prepare_candidate_input(pr, mesh, opts, i) {
+            if prepare_candidate_input(pr, &mut prepared, mesh, opts, i) {
                 order.push(i);
             }
         }
@@ -376,7 +373,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
                 c.output = None;
                 pr.candidates.push(c);
                 let i = pr.candidates.len() - 1;
-                if prepare_candidate_input(pr, mesh, opts, i) {
+                if prepare_candidate_input(pr, &mut prepared, mesh, opts, i) {
                     order.push(i);
                 } else {
                     pr.candidates.pop();

@@ -95,6 +95,12 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
         }
         cfg.outlier_prob = p;
     }
+    if let Some(k) = a.outlier_scale {
+        if !(k.is_finite() && k > 0.0) {
+            return Err(sddpm::Error::InvalidArgument(format!("--outlier-scale must be positive, got {k}")));
+        }
+        cfg.outlier_scale = k;
+    }
     if let Some(w) = a.warmup {
         cfg.warmup_steps = w;
     }
@@ -106,12 +112,6 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
             return Err(sddpm::Error::InvalidArgument(format!("--label-dropout must be in [0, 1), got {p}")));
         }
         cfg.label_dropout = p;
-    }
-    if let Some(k) = a.outlier_scale {
-        if !(k.is_finite() && k > 0.0) {
-            return Err(sddpm::Error::InvalidArgument(format!("--outlier-scale must be positive, got {k}")));
-        }
-        cfg.outlier_scale = k;
     }
     if let Some(f) = a.final_lr {
         cfg.final_lr_fraction = f;

@@ -263,19 +263,21 @@ impl Denoiser {
         let temb = self.time2.forward(silu(self.time1.forward(temb)));
         let cemb = self.ctx2.forward(silu(self.ctx1.forward(ctx.clone())));
         let emb = silu(temb + cemb);
-        let ctx_in = if self.prior_in.is_some() { Some(ctx.clone()) } else { None };
+        // the template prior is read off the context before the context is consumed
+        let prior = self.prior_in.as_ref().map(|p| {
+            let oh: Vec<f32> = ctx.clone().into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
+            let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
+            p.forward(Tensor::<4>::from_data(TensorData::new(img, [b, 3, h, w]), &device))
+        });
         let cells = self.cell2.forward(silu(self.cell1.forward(ctx))).reshape([b, NUM_CELLS, self.cell_dim]);
 
         let coords = Tensor::<4>::from_data(TensorData::new(coordinate_channels(), [1, 2, h, w]), &device).expand([b, 2, h, w]);
         let x = Tensor::cat(vec![x, coords], 1);
         let xin = self.point.as_ref().map(|_| x.clone());
-        let mut h0 = self.conv_in.forward(x);
-        if let Some(p) = &self.prior_in {
-            let oh: Vec<f32> = ctx_data(&ctx_in);
-            let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
-            let pt = Tensor::<4>::from_data(TensorData::new(img, [b, 3, h, w]), &device);
-            h0 = h0 + p.forward(pt);
-        }
+        let h0 = match prior {
+            Some(p) => self.conv_in.forward(x) + p,
+            None => self.conv_in.forward(x),
+        };
         let h0 = self.enc0.forward(h0, emb.clone(), cells.clone());
         let h1 = self.down0.forward(h0.clone());
         let h1 = self.enc1.forward(h1, emb.clone(), cells.clone());
@@ -292,10 +294,6 @@ impl Denoiser {
             _ => out,
         }
     }
-}
-
-fn ctx_data(ctx: &Option<Tensor<2>>) -> Vec<f32> {
-    ctx.as_ref().map(|c| c.clone().into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default()).unwrap_or_default()
 }
 
 /// Seed of the template prior's samples (fixed: the prior is a function of the context).
