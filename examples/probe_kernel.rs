@@ -1,7 +1,8 @@
 //! Developer probe: the reverse process with a *kernel* denoiser instead of the
 //! network — the Bayes estimator of x_0 with the template prior's points as draws
 //! (x0_hat = sum_j w_j p_j, w_j ~ exp(-|y - sqrt(ab) p_j|^2 / (2 (1 - ab)))), per
-//! occupied cell. It bounds what a denoiser that uses the label fully would give:
+//! occupied cell (env SIGMA: the data's jitter around the prior points, RHO: the
+//! width in slots of a Gaussian prior on rank distance; both 0 = off). It bounds what a denoiser that uses the label fully would give:
 //! the output's PCD to every template (TCV: target nearest and <= tau_CD) for the
 //! true label and for wrong ones. Args: labels_of_input start_step label...
 use rand_distr::{Distribution, StandardNormal};
@@ -26,6 +27,10 @@ fn main() {
         let (x, y) = (x_in[k] as f64, x_in[hw + k] as f64);
         x_in[2 * hw + k] += (warp * (x * 1.7).sin() * (y * 1.3).cos()) as f32;
     }
+    // jitter sigma of the data around the prior points and the rank prior's width
+    // (slots; 0 = rank-blind), as in the network's template attention
+    let env = |k: &str, d: f64| std::env::var(k).ok().map(|v| v.parse().unwrap()).unwrap_or(d);
+    let (sigma, rho) = (env("SIGMA", 0.0), env("RHO", 0.0));
     let tpl = cached_templates(2048);
     let names = pcd_labels();
     for lab in &args[3..] {
@@ -45,12 +50,19 @@ fn main() {
                 for p in 0..512 {
                     let (r, c) = slot(n, p);
                     let y: [f64; 3] = [0, 1, 2].map(|ch| x[flat(ch, r, c)] as f64 - sched.qcoef[t] * sched.config.q[ch]);
-                    let lw: Vec<f64> = pj.iter().map(|q| -(0..3).map(|a| (y[a] - sa * q[a]).powi(2)).sum::<f64>() / (2.0 * sd * sd)).collect();
+                    let v = sa * sa * sigma * sigma + sd * sd;
+                    let lw: Vec<f64> = pj.iter().enumerate()
+                        .map(|(j, q)| {
+                            let r = if rho > 0.0 { ((j as f64 - p as f64) / rho).powi(2) / 2.0 } else { 0.0 };
+                            -(0..3).map(|a| (y[a] - sa * q[a]).powi(2)).sum::<f64>() / (2.0 * v) - r
+                        })
+                        .collect();
                     let m = lw.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
                     let w: Vec<f64> = lw.iter().map(|v| (v - m).exp()).collect();
                     let tot: f64 = w.iter().sum();
                     for ch in 0..3 {
-                        let x0: f64 = pj.iter().zip(&w).map(|(q, wi)| wi * q[ch]).sum::<f64>() / tot;
+                        let pbar: f64 = pj.iter().zip(&w).map(|(q, wi)| wi * q[ch]).sum::<f64>() / tot;
+                        let x0 = pbar + sa * sigma * sigma / v * (y[ch] - sa * pbar);
                         eps[flat(ch, r, c)] = ((y[ch] - sa * x0) / sd) as f32;
                     }
                 }

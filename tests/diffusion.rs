@@ -234,3 +234,60 @@ fn tempdir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+#[test]
+fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing() {
+    use burn::tensor::{Tensor, TensorData};
+    use sddpm::diffusion::model::{prior_image, KERNEL_RHO0, KERNEL_SIGMA0};
+    use sddpm::polycube::tensor::{flat, slot};
+    let dir = tempdir("kernel");
+    let m = tiny_model(&dir);
+    let ctx = Context::parse("THC+Z,cube,BHC+X,0,0,0,0,0,0,0,0,0").unwrap();
+    let mut cfg = m.meta.model.clone();
+    cfg.kernel = true;
+    let rec = sddpm::diffusion::net_bytes(&m.net).unwrap();
+    let with = sddpm::diffusion::load_net_with(&cfg, &rec, &m.device, true).unwrap().with_schedule(&m.schedule);
+    let mut rng = item_rng(4, 4);
+    let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    let prior = prior_image(&ctx.one_hot());
+    for t in [5usize, 60, 250] {
+        let z: Vec<f32> = (0..x0.len()).map(|i| ((i * 7919 % 1000) as f32 / 500.0 - 1.0) * 1.2).collect();
+        let mut x = vec![0f32; x0.len()];
+        m.schedule.forward_sample(&x0, &z, t, &mut x);
+        let xt = || Tensor::<4>::from_data(TensorData::new(x.clone(), [1, 3, 64, 96]), &m.device);
+        let ct = || Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &m.device);
+        // the gate and the input convolution start at zero: the warm start predicts what the loaded weights do
+        let a: Vec<f32> = m.net.forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
+        let b: Vec<f32> = with.forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
+        assert_eq!(a, b, "t = {t}");
+        // the estimate equals the posterior mean written out per point in f64
+        let (x0t, epst) = with.kernel_estimate(xt(), &[t], ct()).unwrap();
+        let (x0h, epsh): (Vec<f32>, Vec<f32>) = (x0t.into_data().try_into_vec().unwrap(), epst.into_data().try_into_vec().unwrap());
+        let ab = m.schedule.alpha_bar[t];
+        let (sa, sd) = (ab.sqrt(), (1.0 - ab).sqrt());
+        let s2 = (KERNEL_SIGMA0 as f64).powi(2);
+        let v = ab * s2 + sd * sd;
+        for n in [0usize, 1, 2, 5] {
+            let pj: Vec<[f64; 3]> = (0..512).map(|p| { let (r, c) = slot(n, p); [0, 1, 2].map(|ch| prior[flat(ch, r, c)] as f64) }).collect();
+            for p in (0..512).step_by(37) {
+                let (r, c) = slot(n, p);
+                let y: [f64; 3] = [0, 1, 2].map(|ch| x[flat(ch, r, c)] as f64 - m.schedule.qcoef[t] * m.schedule.config.q[ch]);
+                let rho = KERNEL_RHO0 as f64;
+                let lw: Vec<f64> = pj.iter().enumerate()
+                    .map(|(j, q)| -(0..3).map(|k| (y[k] - sa * q[k]).powi(2)).sum::<f64>() / (2.0 * v) - ((j as f64 - p as f64) / rho).powi(2) / 2.0)
+                    .collect();
+                let mx = lw.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+                let w: Vec<f64> = lw.iter().map(|l| (l - mx).exp()).collect();
+                let tot: f64 = w.iter().sum();
+                for ch in 0..3 {
+                    let want: f64 = pj.iter().zip(&w).map(|(q, wi)| wi * (q[ch] + sa * s2 / v * (y[ch] - sa * q[ch]))).sum::<f64>() / tot;
+                    let got = x0h[flat(ch, r, c)] as f64;
+                    assert!((got - want).abs() < 2e-4, "t {t} cell {n} point {p} ch {ch}: x0 {got} vs {want}");
+                    let e = (y[ch] - sa * want) / sd;
+                    // eps divides the x0 difference (f32 sums over 512 weights) by sqrt(1 - ab)
+                    assert!((epsh[flat(ch, r, c)] as f64 - e).abs() < 2e-4 * sa / sd + 1e-4, "t {t} eps {} vs {e}", epsh[flat(ch, r, c)]);
+                }
+            }
+        }
+    }
+}

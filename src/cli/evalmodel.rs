@@ -38,6 +38,9 @@ pub struct EvalArgs {
     /// Classifier-free guidance weight (SamplerOptions::guidance; 0 = off).
     #[arg(long)]
     pub guidance: Option<f64>,
+    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone; default: the learned gate).
+    #[arg(long)]
+    pub kernel_gate: Option<f64>,
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
     pub sweep: bool,
@@ -58,6 +61,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if let Some(w) = a.guidance {
         opts.sampler.guidance = w;
     }
+    opts.sampler.kernel_gate = a.kernel_gate;
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
     }

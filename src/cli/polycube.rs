@@ -42,6 +42,9 @@ pub struct PolycubeArgs {
     /// Classifier-free guidance weight (0 = off; default: the library's default).
     #[arg(long)]
     pub guidance: Option<f64>,
+    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone; default: the learned gate).
+    #[arg(long)]
+    pub kernel_gate: Option<f64>,
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
@@ -81,6 +84,7 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     if let Some(w) = a.guidance {
         o.sampler.guidance = w;
     }
+    o.sampler.kernel_gate = a.kernel_gate;
     o
 }
 

@@ -51,6 +51,9 @@ pub struct TrainArgs {
     /// Template prior input (ModelConfig::prior); with --init-from on weights without it, a warm start.
     #[arg(long)]
     pub prior: bool,
+    /// Template attention (ModelConfig::kernel); with --init-from on weights without it, a warm start.
+    #[arg(long)]
+    pub kernel: bool,
     /// Label dropout probability (classifier-free guidance; see TrainConfig::label_dropout).
     #[arg(long)]
     pub label_dropout: Option<f64>,
@@ -103,6 +106,9 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     }
     if let Some(w) = a.warmup {
         cfg.warmup_steps = w;
+    }
+    if a.kernel {
+        cfg.model.kernel = true;
     }
     if a.prior {
         cfg.model.prior = true;

@@ -83,8 +83,8 @@ impl Model {
     pub fn from_bytes(bytes: &[u8], backend: Backend) -> Result<Model> {
         let (meta, record) = weights::decode(bytes)?;
         let device = device(backend);
-        let net = load_net(&meta.model, record, &device)?;
         let schedule = Schedule::new(meta.schedule.clone());
+        let net = load_net(&meta.model, record, &device)?.with_schedule(&schedule);
         Ok(Model { meta, schedule, net, device })
     }
 

@@ -57,11 +57,20 @@ pub struct ModelConfig {
     /// starts at zero, so a warm start from weights without it begins at those weights.
     #[serde(default)]
     pub prior: bool,
+    /// Template attention ([`KernelHead`]): every noisy point attends to its cell's
+    /// template-prior points with the Bayes posterior weights of the forward process,
+    /// giving an estimate of x_0 that depends on the label by construction; the
+    /// estimate enters the first features (zero-initialised convolution) and the
+    /// output is blended towards the estimate's noise by a learned per-timestep gate
+    /// (zero at first). A network with only the modulations and the prior image was
+    /// measured to ignore the label (BENCHMARKS.md, "The root cause").
+    #[serde(default)]
+    pub kernel: bool,
 }
 
 impl Default for ModelConfig {
     fn default() -> Self {
-        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0, prior: false }
+        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0, prior: false, kernel: false }
     }
 }
 
@@ -214,6 +223,7 @@ pub struct Denoiser {
     conv_out: Conv2d,
     point: Option<PointHead>,
     prior_in: Option<Conv2d>,
+    kernel: Option<KernelHead>,
     time_dim: usize,
     cell_dim: usize,
 }
@@ -249,9 +259,43 @@ impl Denoiser {
                     .with_initializer(burn::nn::Initializer::Zeros)
                     .init(device)
             }),
+            kernel: cfg.kernel.then(|| KernelHead::new(c0, cfg.emb_dim, device)),
             time_dim: cfg.time_dim,
             cell_dim: cfg.cell_dim,
         }
+    }
+
+    /// Give the template attention the forward process's coefficients (a no-op for a
+    /// network without it). Loading a weights file does this; a network built by hand
+    /// with `kernel` must be given its schedule before `forward`.
+    pub fn with_schedule(mut self, s: &super::schedule::Schedule) -> Self {
+        if let Some(k) = self.kernel.as_mut() {
+            k.coef = (0..=s.steps())
+                .map(|t| {
+                    let ab = s.alpha_bar[t];
+                    let sh = s.config.q.map(|q| (s.qcoef[t] * q) as f32);
+                    [ab.sqrt() as f32, (1.0 - ab).sqrt().max(1e-6) as f32, sh[0], sh[1], sh[2]]
+                })
+                .collect();
+        }
+        self
+    }
+
+    /// Fix the template attention's gate (1 = the estimate alone, 0 = the U-Net
+    /// alone; None = the learned gate). A no-op without template attention.
+    pub fn with_kernel_gate(mut self, gate: Option<f32>) -> Self {
+        if let Some(k) = self.kernel.as_mut() {
+            k.gate_override = gate;
+        }
+        self
+    }
+
+    /// The template attention's estimate (x0_hat, eps_hat) for a batch, or None
+    /// without it.
+    pub fn kernel_estimate(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Option<(Tensor<4>, Tensor<4>)> {
+        let k = self.kernel.as_ref()?;
+        let prior = prior_tensor(ctx, &x.device());
+        Some(k.estimate(x, t, prior))
     }
 
     /// Predict the noise. `x`: [B, 3, 64, 96]; `t`: the B timesteps; `ctx`: [B, 132].
@@ -262,22 +306,30 @@ impl Denoiser {
         let temb = Tensor::<2>::from_data(TensorData::new(timestep_encoding(t, self.time_dim), [b, self.time_dim]), &device);
         let temb = self.time2.forward(silu(self.time1.forward(temb)));
         let cemb = self.ctx2.forward(silu(self.ctx1.forward(ctx.clone())));
-        let emb = silu(temb + cemb);
+        let emb = silu(temb.clone() + cemb);
         // the template prior is read off the context before the context is consumed
-        let prior = self.prior_in.as_ref().map(|p| {
-            let oh: Vec<f32> = ctx.clone().into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
-            let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
-            p.forward(Tensor::<4>::from_data(TensorData::new(img, [b, 3, h, w]), &device))
+        let prior_img = (self.prior_in.is_some() || self.kernel.is_some()).then(|| prior_tensor(ctx.clone(), &device));
+        let prior = self.prior_in.as_ref().zip(prior_img.clone()).map(|(p, img)| p.forward(img));
+        let kern = self.kernel.as_ref().zip(prior_img).map(|(k, img)| {
+            let (x0, eps) = k.estimate(x.clone(), t, img);
+            let gate = match k.gate_override {
+                Some(g) => Tensor::<4>::full([b, 1, 1, 1], g, &device),
+                None => k.gate.forward(silu(temb.clone())).reshape([b, 1, 1, 1]),
+            };
+            (k.input.forward(x0), eps, gate)
         });
         let cells = self.cell2.forward(silu(self.cell1.forward(ctx))).reshape([b, NUM_CELLS, self.cell_dim]);
 
         let coords = Tensor::<4>::from_data(TensorData::new(coordinate_channels(), [1, 2, h, w]), &device).expand([b, 2, h, w]);
         let x = Tensor::cat(vec![x, coords], 1);
         let xin = self.point.as_ref().map(|_| x.clone());
-        let h0 = match prior {
-            Some(p) => self.conv_in.forward(x) + p,
-            None => self.conv_in.forward(x),
-        };
+        let mut h0 = self.conv_in.forward(x);
+        if let Some(p) = prior {
+            h0 = h0 + p;
+        }
+        if let Some((kin, _, _)) = &kern {
+            h0 = h0 + kin.clone();
+        }
         let h0 = self.enc0.forward(h0, emb.clone(), cells.clone());
         let h1 = self.down0.forward(h0.clone());
         let h1 = self.enc1.forward(h1, emb.clone(), cells.clone());
@@ -289,11 +341,123 @@ impl Denoiser {
         let u0 = upsample(u1, 2, 2);
         let u0 = self.dec0.forward(Tensor::cat(vec![u0, h0], 1), emb.clone(), cells.clone());
         let out = self.conv_out.forward(silu(self.norm_out.forward(u0.clone())));
-        match (&self.point, xin) {
+        let out = match (&self.point, xin) {
             (Some(p), Some(xin)) => out + p.forward(xin, u0, emb, cells),
             _ => out,
+        };
+        match kern {
+            Some((_, eps, gate)) => out.clone() + (eps - out) * gate,
+            None => out,
         }
     }
+}
+
+/// The template priors of a batch of contexts as a [B, 3, 64, 96] tensor.
+fn prior_tensor(ctx: Tensor<2>, device: &Device) -> Tensor<4> {
+    let b = ctx.dims()[0];
+    let oh: Vec<f32> = ctx.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
+    let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
+    Tensor::<4>::from_data(TensorData::new(img, [b, 3, TENSOR_H, TENSOR_W]), device)
+}
+
+/// Template attention: each noisy point of a cell attends to the cell's 512
+/// template-prior points p_j. Points are laid out in sorted (x, y, z) order in both,
+/// so the point in slot i is a draw from the prior points near rank i, not from the
+/// whole cell: the prior over j is a Gaussian in rank, exp(-(i - j)^2 / (2 rho^2)),
+/// rho learned (a rank-blind estimate was measured worse than the network at every
+/// t <= 200, one with rho = 12 as good as the network at t >= 60 and better at
+/// t >= 300: `examples/probe_gate`). Modelling a training point as a prior point plus
+/// isotropic jitter of learned size sigma, the forward process gives
+/// y = x_t - qshift_t ~ N(sqrt(ab) p_j, v I) with v = ab sigma^2 + (1 - ab), so the
+/// posterior weights are softmax_j(-|y - sqrt(ab) p_j|^2 / (2 v) - (i - j)^2 / (2 rho^2)) and
+/// E[x_0 | y] = sum_j w_j (p_j + sqrt(ab) sigma^2 / v (y - sqrt(ab) p_j)); its noise is
+/// (y - sqrt(ab) x0_hat) / sqrt(1 - ab). The label decides the p_j, so the estimate
+/// uses the label by construction — the Bayes denoiser for data drawn from the
+/// templates, which `examples/probe_kernel` measured to make the label's shape.
+#[derive(Module, Debug)]
+pub struct KernelHead {
+    /// Per-timestep blend of the network's output towards the estimate's noise.
+    gate: Linear,
+    /// The estimate x0_hat into the first features.
+    input: Conv2d,
+    /// ln sigma (jitter of the data around the template samples, in cell units).
+    log_sigma: burn::module::Param<Tensor<1>>,
+    /// ln rho (width of the rank prior, in slots).
+    log_rho: burn::module::Param<Tensor<1>>,
+    /// A fixed gate instead of the learned one (sampler option; None = learned).
+    #[module(skip)]
+    gate_override: Option<f32>,
+    /// Per timestep: sqrt(ab), sqrt(1 - ab), the mean shift per channel.
+    #[module(skip)]
+    coef: Vec<[f32; 5]>,
+}
+
+/// Initial jitter of the template attention, in cell units (the training loss is
+/// flat in it between 0.005 and 0.04, `examples/probe_gate`; generation is not:
+/// with 0.01 the decoded points snap to the prior's 512 points and leave gaps, with
+/// 0.03 they stay spread, `examples/probe_kernel` with SIGMA / RHO).
+pub const KERNEL_SIGMA0: f32 = 0.03;
+/// Initial width of the rank prior (slots; the best of 4 / 12 / 32 / none measured
+/// by `examples/probe_gate`).
+pub const KERNEL_RHO0: f32 = 12.0;
+
+impl KernelHead {
+    fn new(c0: usize, emb_dim: usize, device: &Device) -> Self {
+        KernelHead {
+            gate: LinearConfig::new(emb_dim, 1).with_initializer(burn::nn::Initializer::Zeros).init(device),
+            input: Conv2dConfig::new([3, c0], [3, 3])
+                .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+                .with_initializer(burn::nn::Initializer::Zeros)
+                .init(device),
+            log_sigma: burn::module::Param::from_tensor(Tensor::<1>::from_floats([KERNEL_SIGMA0.ln()], device)),
+            log_rho: burn::module::Param::from_tensor(Tensor::<1>::from_floats([KERNEL_RHO0.ln()], device)),
+            gate_override: None,
+            coef: Vec::new(),
+        }
+    }
+
+    /// (x0_hat, eps_hat) for x_t [B, 3, 64, 96], timesteps t and the prior image.
+    fn estimate(&self, x: Tensor<4>, t: &[usize], prior: Tensor<4>) -> (Tensor<4>, Tensor<4>) {
+        assert!(!self.coef.is_empty(), "template attention used before Denoiser::with_schedule");
+        let device = x.device();
+        let b = t.len();
+        let nc = NUM_CELLS;
+        let np = BLOCK_H * BLOCK_W;
+        let co: Vec<[f32; 5]> = t.iter().map(|&tt| self.coef[tt.min(self.coef.len() - 1)]).collect();
+        let shift = Tensor::<4>::from_data(TensorData::new(co.iter().flat_map(|c| [c[2], c[3], c[4]]).collect::<Vec<f32>>(), [b, 3, 1, 1]), &device);
+        let per = |f: &dyn Fn(&[f32; 5]) -> f32| Tensor::<3>::from_data(TensorData::new(co.iter().map(f).collect::<Vec<f32>>(), [b, 1, 1]), &device)
+            .reshape([b, 1, 1, 1]).expand([b, nc, 1, 1]).reshape([b * nc, 1, 1]);
+        let sa = per(&|c| c[0]);
+        let sd = per(&|c| c[1]);
+        let var_data = (self.log_sigma.val() * 2.0).exp().reshape([1, 1, 1]);
+        let v = sa.clone().powf_scalar(2.0) * var_data.clone() + sd.clone().powf_scalar(2.0);
+        let y = to_cells(x - shift.clone()); // [B*12, 512, 3]
+        let p = to_cells(prior);
+        let psq = p.clone().powf_scalar(2.0).sum_dim(2).reshape([b * nc, 1, np]);
+        let d2: Vec<f32> = (0..np * np).map(|k| ((k / np) as f32 - (k % np) as f32).powi(2)).collect();
+        let rank = Tensor::<2>::from_data(TensorData::new(d2, [np, np]), &device).reshape([1, np, np]);
+        let inv_rho2 = (self.log_rho.val() * -2.0).exp().reshape([1, 1, 1]);
+        let logits = (y.clone().matmul(p.clone().swap_dims(1, 2)) * sa.clone() - psq * sa.clone().powf_scalar(2.0) * 0.5) / v.clone()
+            - rank * inv_rho2 * 0.5;
+        let w = burn::tensor::activation::softmax(logits, 2);
+        let pbar = w.matmul(p);
+        let x0 = pbar.clone() + (y.clone() - pbar * sa.clone()) * (sa.clone() * var_data / v);
+        let eps = (y - x0.clone() * sa) / sd;
+        (from_cells(x0, b), from_cells(eps, b))
+    }
+}
+
+/// [B, 3, 64, 96] -> [B * 12, 512, 3]: each cell block's points (block order).
+fn to_cells(x: Tensor<4>) -> Tensor<3> {
+    let b = x.dims()[0];
+    let (rb, cb) = (TENSOR_H / BLOCK_H, TENSOR_W / BLOCK_W);
+    x.reshape([b, 3, rb, BLOCK_H, cb, BLOCK_W]).permute([0, 2, 4, 3, 5, 1]).reshape([b * rb * cb, BLOCK_H * BLOCK_W, 3])
+}
+
+/// Inverse of [`to_cells`].
+fn from_cells(x: Tensor<3>, b: usize) -> Tensor<4> {
+    let (rb, cb) = (TENSOR_H / BLOCK_H, TENSOR_W / BLOCK_W);
+    x.reshape([b, rb, cb, BLOCK_H, BLOCK_W, 3]).permute([0, 5, 1, 3, 2, 4]).reshape([b, 3, TENSOR_H, TENSOR_W])
 }
 
 /// Seed of the template prior's samples (fixed: the prior is a function of the context).

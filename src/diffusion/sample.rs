@@ -65,6 +65,10 @@ pub struct SamplerOptions {
     /// e_c + w (e_c - e_u). 0 = off (one network call per step); w > 0 doubles the
     /// work per step. Meaningful for weights trained with label dropout.
     pub guidance: f64,
+    /// Gate of the template attention (`ModelConfig::kernel`): 1 = its Bayes
+    /// estimate alone, 0 = the U-Net alone; None = the gate the weights learned.
+    /// Ignored by weights without template attention.
+    pub kernel_gate: Option<f64>,
 }
 
 impl Default for SamplerOptions {
@@ -81,6 +85,7 @@ impl Default for SamplerOptions {
             clip_margin: DEFAULT_CLIP_MARGIN,
             eps_scale: 1.0,
             guidance: 0.0,
+            kernel_gate: None,
         }
     }
 }
@@ -158,6 +163,14 @@ pub fn reverse_diffusion(
         }
     }
     let n = inputs.len();
+    let gated;
+    let net = match opts.kernel_gate {
+        Some(g) => {
+            gated = model.net.clone().with_kernel_gate(Some(g as f32));
+            &gated
+        }
+        None => &model.net,
+    };
     let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;
     let t_start = if opts.start_step == 0 { sched.steps() } else { opts.start_step.min(sched.steps()) };
@@ -204,7 +217,7 @@ pub fn reverse_diffusion(
                 None => (x.clone(), b, ctx_t.clone()),
             };
             let xt = Tensor::<4>::from_data(TensorData::new(xin, [bb, 3, TENSOR_H, TENSOR_W]), &model.device);
-            let eps = model.net.forward(xt, &vec![t; bb], ct);
+            let eps = net.forward(xt, &vec![t; bb], ct);
             let mut eps: Vec<f32> = eps
                 .into_data()
                 .try_into_vec::<f32>()

@@ -185,6 +185,7 @@ pub fn train(
                     // together with the loaded U-Net.
                     let head = c.model.point_width;
                     let prior = c.model.prior;
+                    let kernel = c.model.kernel;
                     c.model = meta.model.clone();
                     if head > 0 && c.model.point_width == 0 {
                         c.model.point_width = head;
@@ -193,6 +194,11 @@ pub fn train(
                     // likewise the template prior's input convolution (zero at first)
                     if prior && !c.model.prior {
                         c.model.prior = true;
+                        warm_partial = true;
+                    }
+                    // and the template attention (gate and input at zero at first)
+                    if kernel && !c.model.kernel {
+                        c.model.kernel = true;
                         warm_partial = true;
                     }
                     c.schedule = meta.schedule.clone();
@@ -245,6 +251,7 @@ fn train_loop(
         data.truncate(n.max(1));
     }
     let sched = Schedule::new(cfg.schedule.clone());
+    *net = net.clone().with_schedule(&sched);
     let bs = cfg.batch_size.max(1);
     let steps_per_epoch = data.len().div_ceil(bs);
     let t_max = if cfg.t_max == 0 { sched.steps() } else { cfg.t_max.min(sched.steps()) };
