@@ -29,6 +29,12 @@ pub struct EvalSummary {
     pub precheck_passed: usize,
     pub gocc_passed: usize,
     pub tcv_passed: usize,
+    /// Cases whose aligned input itself (the tensor before any noise) passes GOCC and
+    /// TCV under the true context: what a denoiser that only kept the input would
+    /// score, the reference for the threshold.
+    pub input_tcv_passed: usize,
+    /// Why the inputs that fail it do.
+    pub input_failures: Vec<String>,
     pub pass_rate: f64,
     pub per_category: Vec<CategoryStat>,
     /// Wrong-context trials and how many were rejected.
@@ -85,6 +91,14 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         } else {
             let why = c.report.as_ref().and_then(|r| r.reason.clone()).unwrap_or_else(|| format!("pre-check: {:.1}% in empty cells", 100.0 * c.occupancy.in_empty_cells));
             s.failures.push(format!("case {i} {ctx}: {why}"));
+        }
+        if let Some(inp) = &c.input {
+            let rep = crate::verify::verify(&inp.tensor, &ctx, &inp.frame, &opts.verify);
+            if rep.passed {
+                s.input_tcv_passed += 1;
+            } else {
+                s.input_failures.push(format!("case {i}: {}", rep.reason.clone().unwrap_or_default()));
+            }
         }
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
             let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
