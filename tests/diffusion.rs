@@ -291,3 +291,20 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
         }
     }
 }
+
+#[test]
+fn non_finite_sampler_weights_are_refused() {
+    let dir = tempdir("nonfinite");
+    let m = tiny_model(&dir);
+    let ctx = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mut rng = item_rng(3, 3);
+    let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
+    for opts in [
+        SamplerOptions { guidance: f64::NAN, ..Default::default() },
+        SamplerOptions { eps_scale: f64::INFINITY, ..Default::default() },
+        SamplerOptions { kernel_gate: Some(f64::NAN), ..Default::default() },
+    ] {
+        let e = reverse_diffusion(&m, &[x.clone()], &[ctx], &opts, &mut NoProgress).unwrap_err();
+        assert!(e.to_string().contains("must be finite"), "{e}");
+    }
+}

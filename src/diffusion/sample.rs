@@ -147,6 +147,12 @@ pub fn reverse_diffusion(
     opts: &SamplerOptions,
     progress: &mut dyn Progress,
 ) -> Result<SampleOutput> {
+    if !opts.guidance.is_finite() || !opts.eps_scale.is_finite() || opts.kernel_gate.is_some_and(|g| !g.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "sampler weights must be finite (guidance {}, eps_scale {}, kernel_gate {:?})",
+            opts.guidance, opts.eps_scale, opts.kernel_gate
+        )));
+    }
     if inputs.len() != contexts.len() {
         return Err(Error::InvalidArgument(format!(
             "{} input tensors for {} contexts",
