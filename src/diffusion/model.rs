@@ -390,6 +390,9 @@ pub struct KernelHead {
     /// Per timestep: sqrt(ab), sqrt(1 - ab), the mean shift per channel.
     #[module(skip)]
     coef: Vec<[f32; 5]>,
+    /// Squared rank distances (i - j)^2 of a cell's slots, [512 * 512] (built once).
+    #[module(skip)]
+    rank_d2: Vec<f32>,
 }
 
 /// Initial jitter of the template attention, in cell units (the training loss is
@@ -413,6 +416,10 @@ impl KernelHead {
             log_rho: burn::module::Param::from_tensor(Tensor::<1>::from_floats([KERNEL_RHO0.ln()], device)),
             gate_override: None,
             coef: Vec::new(),
+            rank_d2: {
+                let np = BLOCK_H * BLOCK_W;
+                (0..np * np).map(|k| ((k / np) as f32 - (k % np) as f32).powi(2)).collect()
+            },
         }
     }
 
@@ -434,8 +441,7 @@ impl KernelHead {
         let y = to_cells(x - shift.clone()); // [B*12, 512, 3]
         let p = to_cells(prior);
         let psq = p.clone().powf_scalar(2.0).sum_dim(2).reshape([b * nc, 1, np]);
-        let d2: Vec<f32> = (0..np * np).map(|k| ((k / np) as f32 - (k % np) as f32).powi(2)).collect();
-        let rank = Tensor::<2>::from_data(TensorData::new(d2, [np, np]), &device).reshape([1, np, np]);
+        let rank = Tensor::<2>::from_data(TensorData::new(self.rank_d2.clone(), [np, np]), &device).reshape([1, np, np]);
         let inv_rho2 = (self.log_rho.val() * -2.0).exp().reshape([1, 1, 1]);
         let logits = (y.clone().matmul(p.clone().swap_dims(1, 2)) * sa.clone() - psq * sa.clone().powf_scalar(2.0) * 0.5) / v.clone()
             - rank * inv_rho2 * 0.5;
