@@ -38,7 +38,7 @@ pub struct EvalArgs {
     /// Classifier-free guidance weight (SamplerOptions::guidance; 0 = off).
     #[arg(long)]
     pub guidance: Option<f64>,
-    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone; default: the learned gate).
+    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
     #[arg(long)]
     pub kernel_gate: Option<f64>,
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
@@ -61,7 +61,9 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if let Some(w) = a.guidance {
         opts.sampler.guidance = w;
     }
-    opts.sampler.kernel_gate = a.kernel_gate;
+    if let Some(g) = a.kernel_gate {
+        opts.sampler.kernel_gate = if g < 0.0 { None } else { Some(g) };
+    }
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
     }

@@ -42,7 +42,7 @@ pub struct PolycubeArgs {
     /// Classifier-free guidance weight (0 = off; default: the library's default).
     #[arg(long)]
     pub guidance: Option<f64>,
-    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone; default: the learned gate).
+    /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
     #[arg(long)]
     pub kernel_gate: Option<f64>,
     /// Model weights (default: the embedded model).
@@ -84,7 +84,9 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     if let Some(w) = a.guidance {
         o.sampler.guidance = w;
     }
-    o.sampler.kernel_gate = a.kernel_gate;
+    if let Some(g) = a.kernel_gate {
+        o.sampler.kernel_gate = if g < 0.0 { None } else { Some(g) };
+    }
     o
 }
 

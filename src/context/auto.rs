@@ -15,7 +15,7 @@
 //!    pre-check, are diffused in one batch and verified.
 
 use super::generate::{
-    diffuse_and_verify, finish, fit_score, polycube_samples, precheck, prepare_input, Candidate, OrientationSearch,
+    diffuse_and_verify, finish, fit_score, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
 use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
@@ -348,6 +348,7 @@ pub fn generate_auto(
         cands.sort_by(|a, b| a.1.total_cmp(&b.1));
         report.boxes[bi].best_fit = cands.first().map(|c| c.1);
     }
+    let best_overall = per_box.iter().filter_map(|c| c.first().map(|x| x.1)).fold(f64::INFINITY, f64::min);
     let mut order: Vec<usize> = Vec::new();
     for (bi, cands) in per_box.iter().enumerate() {
         if let Some(&(_, f)) = cands.first() {
@@ -409,13 +410,20 @@ pub fn generate_auto(
                     report.boxes[cb].locals[job.local].verified.push(job.label.name().to_string());
                 }
             }
-            // Keep only global candidates whose local labels passed (a subregion where no
-            // label passed keeps its best-fit labels and is named if the global stage fails).
+            // Keep only global candidates whose local labels passed, or are their
+            // subregion's best geometric fit (a subregion where no label passed keeps its
+            // kept labels and is named if the global stage fails). The best fit stays
+            // because a single cell cut out of a part can fail TCV under its true label
+            // while a rotated variant passes (BENCHMARKS.md "Main job": the three-hole
+            // block's middle cell passed THC+X only, which no genus-3 row can use).
             let locals = &report.boxes[cb].locals;
             per_box[cb].retain(|(ctx, _)| {
                 locals.iter().all(|l| {
                     let lab = ctx.labels[l.subregion.cell];
-                    lab == Primitive::Null || l.verified.is_empty() || l.verified.iter().any(|v| v == lab.name())
+                    lab == Primitive::Null
+                        || l.verified.is_empty()
+                        || l.verified.iter().any(|v| v == lab.name())
+                        || l.fits.first().is_some_and(|f| f.0 == lab.name())
                 })
             });
         }
@@ -423,8 +431,9 @@ pub fn generate_auto(
         let mut o = opts.clone();
         o.orientations = OrientationSearch::Identity;
         for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
-            global.extend(precheck(&input, ctx, &o)?);
+            global.extend(precheck(&input, ctx, &without_fit_limit(&o))?);
         }
+        limit_fit(&mut global, &o, best_overall);
         let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / aopts.max_boxes.max(1) as f64, s);
         diffuse_and_verify(model, &mut global, opts, &mut sub_progress, &mut timings)?;
         let done = global.iter().any(|c| c.stage == Stage::Verified);

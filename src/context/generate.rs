@@ -50,6 +50,17 @@ pub struct PolycubeOptions {
     /// cell units, between the mapped input and the context's exact polycube surface)
     /// a candidate may have to be diffused (default 0.05).
     pub max_fit: f64,
+    /// Pre-check: candidates whose fit is within this factor of the input's best fit
+    /// are diffused even above `max_fit` (default 2). `max_fit` was set on synthetic
+    /// cells; real parts (round holes, fillets, unequal cells) fit no template that
+    /// well (BENCHMARKS.md "Main job": 0.08 for a torus, 0.1-0.3 for pinion, eight and
+    /// three-hole block), and refusing every candidate of an input before diffusion
+    /// would leave verification nothing to decide. 0 turns the relative rule off.
+    pub relative_fit: f64,
+    /// The relative rule admits no fit above this (default 0.5: measured between the
+    /// worst fit of a right context on the test meshes, 0.28 for the eight's two
+    /// through holes, and the 0.67 of a blind hole asked of a plain box).
+    pub relative_fit_cap: f64,
     /// Surface samples drawn from the input (shared by every candidate).
     pub oversampling: usize,
     /// Seed of sampling and diffusion.
@@ -66,6 +77,8 @@ impl Default for PolycubeOptions {
             min_occupied_fraction: 0.2,
             orientations_per_context: 1,
             max_fit: 0.05,
+            relative_fit: 2.0,
+            relative_fit_cap: 0.5,
             oversampling: DEFAULT_OVERSAMPLING,
             seed: 0,
         }
@@ -313,6 +326,34 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
     Ok(out)
 }
 
+/// The options of a pre-check that refuses on occupancy only (the fit limit is
+/// applied over all of an input's candidates by [`limit_fit`]).
+pub fn without_fit_limit(opts: &PolycubeOptions) -> PolycubeOptions {
+    let mut o = opts.clone();
+    o.max_fit = f64::INFINITY;
+    o
+}
+
+/// The pre-check's fit limit over all of an input's candidates: a candidate that
+/// passed the occupancy test is diffused when its fit is at most `max_fit` or at
+/// most `relative_fit` times the best fit among them (and at most
+/// `relative_fit_cap`); the others are refused
+/// (stage `Occupancy`, their fit in the report).
+/// `best_elsewhere`: the best fit of candidates prechecked apart from these (the
+/// automated mode's other occupied boxes), so that a box whose every context fits
+/// far worse than another box's best is not diffused on its own terms.
+pub fn limit_fit(cands: &mut [Candidate], opts: &PolycubeOptions, best_elsewhere: f64) {
+    let best = cands.iter().filter(|c| c.stage == Stage::Pending).map(|c| c.fit).fold(best_elsewhere, f64::min);
+    let rel = if opts.relative_fit > 0.0 && best.is_finite() { (opts.relative_fit * best).min(opts.relative_fit_cap) } else { 0.0 };
+    let limit = opts.max_fit.max(rel);
+    for c in cands.iter_mut().filter(|c| c.stage == Stage::Pending) {
+        if !(c.fit <= limit) {
+            c.stage = Stage::Occupancy;
+            c.input = None;
+        }
+    }
+}
+
 /// The fit score is a penalty Chamfer distance with this threshold (squared cell
 /// units: 0.1 cell), so that a missing or extra hole, whose points lie 1/6 cell or
 /// more from the other surface, weighs far more than a smooth deformation.
@@ -467,8 +508,9 @@ pub fn generate_from_contexts(
     let t0 = Instant::now();
     let mut cands = Vec::new();
     for c in contexts {
-        cands.extend(precheck(&input, c, opts)?);
+        cands.extend(precheck(&input, c, &without_fit_limit(opts))?);
     }
+    limit_fit(&mut cands, opts, f64::INFINITY);
     timings.precheck = t0.elapsed().as_secs_f64();
     diffuse_and_verify(model, &mut cands, opts, progress, &mut timings)?;
     timings.total = t_all.elapsed().as_secs_f64();
@@ -484,4 +526,55 @@ pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cand
         .min_by(|a, b| a.1.score.unwrap_or(f64::INFINITY).total_cmp(&b.1.score.unwrap_or(f64::INFINITY)))
         .map(|(i, _)| i);
     PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cand(fit: f64, stage: Stage) -> Candidate {
+        Candidate {
+            context: Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap(),
+            labels: [0; NUM_CELLS],
+            rotation: String::new(),
+            axis_rotation: rotations()[0],
+            occupancy: Occupancy { area_fraction: [0.0; NUM_CELLS], in_empty_cells: 0.0, starved_cells: Vec::new() },
+            fit,
+            stage,
+            report: None,
+            fidelity: None,
+            score: None,
+            input: None,
+            output: None,
+        }
+    }
+
+    #[test]
+    fn fit_limit_is_absolute_or_relative_to_the_best_candidate() {
+        let stages = |c: &[Candidate]| c.iter().map(|c| c.stage).collect::<Vec<_>>();
+        // a real part: nothing under max_fit; the best and those within 2x are diffused
+        let mut c = vec![cand(0.083, Stage::Pending), cand(0.15, Stage::Pending), cand(0.17, Stage::Pending), cand(f64::INFINITY, Stage::Occupancy)];
+        limit_fit(&mut c, &PolycubeOptions::default(), f64::INFINITY);
+        assert_eq!(stages(&c), [Stage::Pending, Stage::Pending, Stage::Occupancy, Stage::Occupancy]);
+        // the relative rule off: max_fit alone refuses them all
+        let mut c = vec![cand(0.083, Stage::Pending), cand(0.15, Stage::Pending)];
+        limit_fit(&mut c, &PolycubeOptions { relative_fit: 0.0, ..Default::default() }, f64::INFINITY);
+        assert_eq!(stages(&c), [Stage::Occupancy, Stage::Occupancy]);
+        // a good fit: max_fit admits up to 0.05 even beyond 2x the best
+        let mut c = vec![cand(0.004, Stage::Pending), cand(0.04, Stage::Pending), cand(0.06, Stage::Pending)];
+        limit_fit(&mut c, &PolycubeOptions::default(), f64::INFINITY);
+        assert_eq!(stages(&c), [Stage::Pending, Stage::Pending, Stage::Occupancy]);
+        // another box fits far better: these are judged against its best
+        let mut c = vec![cand(1.05, Stage::Pending), cand(1.06, Stage::Pending)];
+        limit_fit(&mut c, &PolycubeOptions::default(), 0.28);
+        assert_eq!(stages(&c), [Stage::Occupancy, Stage::Occupancy]);
+        // ... but never above the cap
+        let mut c = vec![cand(0.45, Stage::Pending), cand(0.6, Stage::Pending), cand(0.67, Stage::Pending)];
+        limit_fit(&mut c, &PolycubeOptions::default(), f64::INFINITY);
+        assert_eq!(stages(&c), [Stage::Pending, Stage::Occupancy, Stage::Occupancy]);
+        // a NaN fit is never admitted
+        let mut c = vec![cand(f64::NAN, Stage::Pending)];
+        limit_fit(&mut c, &PolycubeOptions::default(), f64::INFINITY);
+        assert_eq!(stages(&c), [Stage::Occupancy]);
+    }
 }
