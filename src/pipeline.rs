@@ -228,10 +228,27 @@ pub fn run(
         hex_opts.use_correspondence = false;
     } else {
         order = ranked_verified(&pr);
+        // verified candidates first; when their meshes fold, the unverified ones
+        // (by fit) get the remaining builds, as in a run where nothing verified
+        if opts.accept_unverified && order.len() < opts.hex_candidates.max(1) {
+            for i in fallback_order(&mut pr, mesh, &opts.polycube, genus, opts.hex_candidates.max(1)) {
+                if !order.contains(&i) {
+                    order.push(i);
+                }
+            }
+        }
     }
     order.truncate(opts.hex_candidates.max(1));
-    let verified = verification_error.is_none();
     let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
+    let verified = pr.candidates[candidate].stage == crate::context::generate::Stage::Verified;
+    let verification_error = match (verified, verification_error) {
+        (true, _) => None,
+        (false, Some(e)) => Some(e),
+        (false, None) => Some(format!(
+            "the hex meshes of the verified candidates kept inverted elements; the best mesh came from unverified candidate {}",
+            pr.candidates[candidate].context
+        )),
+    };
     seconds.push(("hex".to_string(), t0.elapsed().as_secs_f64() - seconds[0].1));
     if opts.require_valid_hex && hex.quality.inverted > 0 {
         let bad: Vec<String> = hex.scaled_jacobian.iter().enumerate().filter(|(_, &q)| !(q > 0.0)).take(5).map(|(e, q)| format!("{e} ({q:.3})")).collect();

@@ -189,7 +189,7 @@ fn correspondence_seed_is_used_and_harmless() {
         corr.push((*p, [p[0] + noise, p[1] - noise, p[2]]));
     }
     let input = HexInput { surface, context: ctx, correspondence: corr, to_user: Affine::IDENTITY };
-    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    let r = run(&input, &HexOptions { level: Some(2), use_correspondence: true, ..Default::default() });
     assert!(r.surface_map.correspondence_pairs > 0);
     assert_eq!(r.quality.inverted, 0);
     assert_never_worse(&r);
