@@ -183,3 +183,19 @@ fn report_html_renders_in_headless_chromium() {
     assert!(colours.len() > 50, "only {} colours: the pictures did not load", colours.len());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--kernel-gate -1` (the learned gate) parses as a value, not as a flag; a
+/// non-finite gate is refused with exit 2.
+#[test]
+fn kernel_gate_accepts_a_negative_value_and_refuses_nan() {
+    let dir = std::env::temp_dir().join(format!("sddpm-cli-gate-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    let args = |g: &'static str| ["polycube", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "2", "-q", "--kernel-gate", g];
+    let (code, _, err) = sddpm(&args("-1"));
+    assert!(!err.contains("unexpected argument"), "{err}");
+    assert!(code == 0 || code == 2, "exit {code}: {err}");
+    let (code, _, err) = sddpm(&args("NaN"));
+    assert_eq!(code, 2);
+    assert!(err.contains("must be finite"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

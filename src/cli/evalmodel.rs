@@ -39,7 +39,7 @@ pub struct EvalArgs {
     #[arg(long)]
     pub guidance: Option<f64>,
     /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub kernel_gate: Option<f64>,
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
@@ -62,7 +62,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
         opts.sampler.guidance = w;
     }
     if let Some(g) = a.kernel_gate {
-        opts.sampler.kernel_gate = if g < 0.0 { None } else { Some(g) };
+        opts.sampler.kernel_gate = super::polycube::kernel_gate_arg(g);
     }
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;

@@ -43,7 +43,7 @@ pub struct PolycubeArgs {
     #[arg(long)]
     pub guidance: Option<f64>,
     /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub kernel_gate: Option<f64>,
     /// Model weights (default: the embedded model).
     #[arg(long)]
@@ -72,6 +72,11 @@ pub fn request_of(a: &PolycubeArgs) -> Result<ContextRequest> {
     Ok(ContextRequest::Auto)
 }
 
+/// `--kernel-gate G`: a fixed gate, or the learned one for a negative G.
+pub fn kernel_gate_arg(g: f64) -> Option<f64> {
+    if g < 0.0 { None } else { Some(g) }
+}
+
 pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     let mut o = PolycubeOptions { seed: a.seed, ..Default::default() };
     o.sampler.seed = a.seed;
@@ -85,7 +90,7 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
         o.sampler.guidance = w;
     }
     if let Some(g) = a.kernel_gate {
-        o.sampler.kernel_gate = if g < 0.0 { None } else { Some(g) };
+        o.sampler.kernel_gate = kernel_gate_arg(g);
     }
     o
 }
