@@ -157,6 +157,10 @@ typedef struct sddpm_hex_options {
   uint32_t hex_candidates;
   // Mesh the best-fitting diffused candidate when none passed verification (default true).
   bool accept_unverified;
+  // When every candidate's mesh keeps inverted elements, also mesh the input on a
+  // voxel lattice and keep that mesh when it is better (default true; the quality
+  // then reports `verified_polycube` false).
+  bool voxel_fallback;
 } sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short

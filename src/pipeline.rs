@@ -138,7 +138,9 @@ impl Default for RunOptions {
 /// One hex build of a verified candidate.
 #[derive(Debug, Clone, Serialize)]
 pub struct HexAttempt {
-    pub candidate: usize,
+    /// Index into the polycube's candidates; None for the grid-based fallback
+    /// ([`crate::hex::voxel`]), whose `context` reads "voxel N".
+    pub candidate: Option<usize>,
     pub context: String,
     pub min_scaled_jacobian: f64,
     pub inverted: usize,
@@ -240,9 +242,15 @@ pub fn run(
     }
     order.truncate(opts.hex_candidates.max(1));
     let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
-    let verified = pr.candidates[candidate].stage == crate::context::generate::Stage::Verified;
+    let voxel = hex.domain.starts_with("voxel");
+    let verified = !voxel && pr.candidates[candidate].stage == crate::context::generate::Stage::Verified;
     let verification_error = match (verified, verification_error) {
         (true, _) => None,
+        (false, _) if voxel => Some(format!(
+            "every polycube candidate's hex mesh kept inverted elements (best: {}); the mesh comes from the grid-based fallback ({}), not from the polycube",
+            attempts.iter().filter(|a| a.candidate.is_some()).map(|a| format!("{} inverted for {}", a.inverted, a.context)).min().unwrap_or_else(|| "no mesh".into()),
+            hex.domain
+        )),
         (false, Some(e)) => Some(e),
         (false, None) => Some(format!(
             "the hex meshes of the verified candidates kept inverted elements; the best mesh came from unverified candidate {}",
@@ -420,7 +428,8 @@ pub fn build_hex_for_polycube(
         let cand = &pr.candidates[ci];
         let input = hex_input(&pr, cand, mesh)?;
         let th = Instant::now();
-        let mut sub = SubProgress { inner: progress, lo: 0.5 + 0.35 * k as f64 / n as f64, hi: 0.5 + 0.35 * (k + 1) as f64 / n as f64 };
+        let span = if hex_opts.voxel_fallback { 0.25 } else { 0.35 };
+        let mut sub = SubProgress { inner: progress, lo: 0.5 + span * k as f64 / n as f64, hi: 0.5 + span * (k + 1) as f64 / n as f64 };
         let r = match build_hex_mesh(&input, hex_opts, &mut sub) {
             Ok(r) => r,
             Err(e @ Error::Cancelled(_)) => return Err(e),
@@ -430,7 +439,7 @@ pub fn build_hex_for_polycube(
             }
         };
         attempts.push(HexAttempt {
-            candidate: ci,
+            candidate: Some(ci),
             context: cand.context.names(),
             min_scaled_jacobian: r.quality.min,
             inverted: r.quality.inverted,
@@ -446,6 +455,40 @@ pub fn build_hex_for_polycube(
         }
         if best.as_ref().is_some_and(|(_, b)| b.quality.inverted == 0 && b.quality.min >= 0.3) {
             break; // good enough: do not spend another build
+        }
+    }
+    // every polycube mesh folds (or none could be built): the grid-based fallback
+    let folded = best.as_ref().map_or(true, |(_, b)| b.quality.inverted > 0);
+    if hex_opts.voxel_fallback && folded {
+        let th = Instant::now();
+        let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };
+        let identity = Affine::similarity(1.0, [0.0; 3]);
+        match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
+            Ok(r) => {
+                attempts.push(HexAttempt {
+                    candidate: None,
+                    context: r.domain.clone(),
+                    min_scaled_jacobian: r.quality.min,
+                    inverted: r.quality.inverted,
+                    hausdorff_relative: r.hausdorff_relative,
+                    seconds: th.elapsed().as_secs_f64(),
+                });
+                let better = match &best {
+                    None => true,
+                    Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
+                };
+                if better {
+                    // the candidate index stays the best polycube attempt's (or the first)
+                    let ci = best.as_ref().map(|(c, _)| *c).or(order.first().copied()).unwrap_or(0);
+                    best = Some((ci, r));
+                }
+            }
+            Err(e @ Error::Cancelled(_)) => return Err(e),
+            Err(e) => {
+                if best.is_none() {
+                    last_err = Some(e);
+                }
+            }
         }
     }
     match best {

@@ -48,6 +48,10 @@ pub struct SddpmHexOptions {
     pub hex_candidates: u32,
     /// Mesh the best-fitting diffused candidate when none passed verification (default true).
     pub accept_unverified: bool,
+    /// When every candidate's mesh keeps inverted elements, also mesh the input on a
+    /// voxel lattice and keep that mesh when it is better (default true; the quality
+    /// then reports `verified_polycube` false).
+    pub voxel_fallback: bool,
 }
 
 /// Quality summary of a hex mesh.
@@ -115,6 +119,7 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
             optimise_target: h.optimise_target,
             hex_candidates: r.hex_candidates as u32,
             accept_unverified: r.accept_unverified,
+            voxel_fallback: h.voxel_fallback,
         };
         Ok(())
     }
@@ -143,6 +148,7 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     h.smooth_iterations = o.smooth_iterations as usize;
     h.optimise_passes = o.optimise_passes as usize;
     h.optimise_target = o.optimise_target;
+    h.voxel_fallback = o.voxel_fallback;
     Ok((h, (o.hex_candidates as usize).max(1), o.accept_unverified))
 }
 
@@ -190,6 +196,7 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
         };
         let mut p = CProgress { callback: progress, user_data };
         let (_, _, r) = build_hex_for_polycube(&result, &order, &pc.mesh, &hopts, &mut p)?;
+        let verified = verified && r.domain == "polycube";
         *out = Box::into_raw(Box::new(SddpmHexMesh {
             mesh: r.mesh.clone(),
             scaled_jacobian: r.scaled_jacobian.clone(),

@@ -119,6 +119,12 @@ pub struct HexOptions {
     pub release_distance: f64,
     /// Extra random surface samples for the Hausdorff distance.
     pub hausdorff_samples: usize,
+    /// When every polycube candidate's mesh keeps inverted elements, also mesh the
+    /// input on a voxel lattice ([`super::voxel`]) and keep that mesh when it is
+    /// better (default true: on the 16 test parts it gave valid meshes where the
+    /// polycube meshes of 6 folded; BENCHMARKS.md "Main job"). The result says so
+    /// (`HexResult::domain`). Used by the main job and by sddpm_hex_mesh_build.
+    pub voxel_fallback: bool,
     /// Return the mapped mesh when the quality steps end below its minimum scaled
     /// Jacobian (default true; false only to inspect the quality steps).
     pub keep_better_mapped: bool,
@@ -147,6 +153,7 @@ impl Default for HexOptions {
             release_distance: 0.002,
             hausdorff_samples: 20_000,
             keep_better_mapped: true,
+            voxel_fallback: true,
         }
     }
 }
@@ -221,6 +228,10 @@ pub struct HexResult {
     /// Which mesh was returned: "optimised" or "mapped" (when the quality steps did not
     /// beat the mapped mesh's minimum scaled Jacobian).
     pub returned: String,
+    /// Where the elements come from: "polycube" (the parametric domain of the
+    /// polycube, the method of this library) or "voxel N" (the grid-based fallback
+    /// of [`super::voxel`] at N voxels along the longest edge).
+    pub domain: String,
     pub seconds_total: f64,
 }
 
@@ -230,7 +241,7 @@ fn summary(m: &HexMesh) -> QualitySummary {
 
 /// Spread the boundary nodes on the surface (plain tangential Laplacian), take the
 /// harmonic interior when it is better than the current one, and fit again.
-fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &HexOptions, fit_stats: &mut Vec<optimize::FitStats>) {
+pub(crate) fn relax_and_refit(work: &mut Work, sw: &Surface, bquads: &[[u32; 4]], opts: &HexOptions, fit_stats: &mut Vec<optimize::FitStats>) {
     let before = work.mesh.nodes.clone();
     let before_attach = work.attach.clone();
     let q0 = summary(&work.mesh);
@@ -279,13 +290,13 @@ fn flipped_quads(sw: &Surface, pos: &[[f64; 3]], quads: &[[u32; 4]]) -> usize {
         .count()
 }
 
-struct Level {
-    h: LatticeHex,
-    pos: Vec<[f64; 3]>,
-    attach: Vec<u32>,
-    role: Vec<Role>,
-    curve_nb: Vec<Vec<u32>>,
-    bquads: Vec<[u32; 4]>,
+pub(crate) struct Level {
+    pub h: LatticeHex,
+    pub pos: Vec<[f64; 3]>,
+    pub attach: Vec<u32>,
+    pub role: Vec<Role>,
+    pub curve_nb: Vec<Vec<u32>>,
+    pub bquads: Vec<[u32; 4]>,
 }
 
 /// Build the all-hex mesh of `input` (see the module docs and docs/hex.md).
@@ -322,34 +333,8 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     // ---- frames ----
     let frame: BoxFrame = context_frame(&input.context).expect("valid context has cells");
     let grid = input.context.assemble();
-    let mut mesh_n = input.surface.clone();
-    if mesh_n.signed_volume() < 0.0 {
-        for t in mesh_n.triangles.iter_mut() {
-            t.swap(1, 2);
-        }
-    }
-    let user_pts: Vec<[f64; 3]> = mesh_n.vertices.iter().map(|&p| input.to_user.apply(p)).collect();
-    let ubox = Aabb::of_points(&user_pts);
-    let longest = ubox.size().iter().copied().fold(0.0, f64::max);
-    if !(longest > 0.0) {
-        return Err(Error::InvalidArgument("the input surface has no extent".into()));
-    }
-    let sw_scale = 2.0 / longest;
-    // W is U centred and scaled, and mirrored in x when the map to U reverses
-    // orientation, so that the lattice's positive elements stay positive in W.
-    let mirror = input.to_user.det() < 0.0;
-    let sx = if mirror { -sw_scale } else { sw_scale };
-    let c = ubox.centre();
-    let u_to_w = Affine::diagonal([sx, sw_scale, sw_scale], [-sx * c[0], -sw_scale * c[1], -sw_scale * c[2]]);
-    let to_w = u_to_w.after(&input.to_user);
-    let w_to_u = u_to_w.inverse().expect("similarity");
-    let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
-    let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
-    let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
-    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0, opts.feature_median_angle);
-    let sn = Surface::new(mesh_n, features.clone());
-    let sw = Surface::new(mesh_w, features);
-    let diag_w = sw.bbox.diagonal();
+    let fr = working_frames(&input.surface, &input.to_user, opts)?;
+    let Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w } = fr;
     let corr = if opts.use_correspondence { Correspondence::new(&input.correspondence) } else { None };
 
     // ---- levels ----
@@ -368,7 +353,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     let radius = 0.5 * frame.scale / 3.0;
     let fm: FeatureMatch = map::match_features(&h1, &pos_n1, &sn, radius);
     drop(h1);
-    let mut smap = SurfaceMapReport {
+    let smap = SurfaceMapReport {
         feature_curves: sw.features.curves.len(),
         feature_corners: sw.features.corners.len(),
         matched_corners: fm.corners.len(),
@@ -517,8 +502,76 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         prev = Some(cur);
     }
     let lv = chosen.expect("a level is chosen");
-    let level = lv.h.level;
+    let targets = element_targets(&lv.h, &warp, &to_w);
+    let fr = Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w };
+    finish(lv, targets, smap, levels, serde_json::json!({ "fit": fit_stats }), &fr, opts, t_all, progress)
+}
 
+/// The input surface in the working frame W (the user frame centred, scaled to a
+/// longest bounding-box edge of 2, mirrored when the map to the user frame reverses
+/// orientation), with its sharp features.
+pub(crate) struct Frames {
+    /// The surface in the frame the caller gave (normalised), with features.
+    pub sn: Surface,
+    /// The surface in W, with features.
+    pub sw: Surface,
+    pub to_w: Affine,
+    pub w_to_u: Affine,
+    pub mirror: bool,
+    pub sw_scale: f64,
+    pub diag_w: f64,
+}
+
+pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOptions) -> Result<Frames> {
+    let mut mesh_n = surface.clone();
+    if mesh_n.signed_volume() < 0.0 {
+        for t in mesh_n.triangles.iter_mut() {
+            t.swap(1, 2);
+        }
+    }
+    let user_pts: Vec<[f64; 3]> = mesh_n.vertices.iter().map(|&p| to_user.apply(p)).collect();
+    let ubox = Aabb::of_points(&user_pts);
+    let longest = ubox.size().iter().copied().fold(0.0, f64::max);
+    if !(longest > 0.0) {
+        return Err(Error::InvalidArgument("the input surface has no extent".into()));
+    }
+    let sw_scale = 2.0 / longest;
+    // W is U centred and scaled, and mirrored in x when the map to U reverses
+    // orientation, so that the lattice's positive elements stay positive in W.
+    let mirror = to_user.det() < 0.0;
+    let sx = if mirror { -sw_scale } else { sw_scale };
+    let c = ubox.centre();
+    let u_to_w = Affine::diagonal([sx, sw_scale, sw_scale], [-sx * c[0], -sw_scale * c[1], -sw_scale * c[2]]);
+    let to_w = u_to_w.after(&to_user);
+    let w_to_u = u_to_w.inverse().expect("similarity");
+    let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
+    let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
+    let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
+    let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0, opts.feature_median_angle);
+    let sn = Surface::new(mesh_n, features.clone());
+    let sw = Surface::new(mesh_w, features);
+    let diag_w = sw.bbox.diagonal();
+    Ok(Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w })
+}
+
+/// The quality steps and the result, from the mapped mesh of the chosen level:
+/// pillowing, smoothing, optimisation, the release of folded boundary nodes, the
+/// Hausdorff distance, and the mesh back in user coordinates.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish(
+    lv: Level,
+    targets: Vec<[f64; 3]>,
+    mut smap: SurfaceMapReport,
+    levels: Vec<LevelReport>,
+    map_details: serde_json::Value,
+    fr: &Frames,
+    opts: &HexOptions,
+    t_all: Instant,
+    progress: &mut dyn Progress,
+) -> Result<HexResult> {
+    let Frames { sw, w_to_u, mirror, sw_scale, diag_w, .. } = fr;
+    let (sw, w_to_u, mirror, sw_scale, diag_w) = (sw, *w_to_u, *mirror, *sw_scale, *diag_w);
+    let level = lv.h.level;
     // ---- mapped mesh ----
     let mut work = Work {
         mesh: HexMesh { nodes: lv.pos.clone(), elements: lv.h.mesh.elements.clone() },
@@ -528,7 +581,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         bgraph: Default::default(),
         nbr: Default::default(),
         n2e: Default::default(),
-        target: element_targets(&lv.h, &warp, &to_w),
+        target: targets,
     };
     work.rebuild();
     smap.flipped_quads = flipped_quads(&sw, &work.mesh.nodes, &lv.bquads);
@@ -541,7 +594,13 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         nodes: mapped.nodes.len(),
         elements: mapped.elements.len(),
         seconds: levels.iter().map(|l| l.seconds).sum(),
-        details: serde_json::json!({ "level": level, "flipped_boundary_quads": smap.flipped_quads, "fit": fit_stats }),
+        details: {
+            let mut d = serde_json::json!({ "level": level, "flipped_boundary_quads": smap.flipped_quads });
+            if let (Some(d), serde_json::Value::Object(extra)) = (d.as_object_mut(), map_details) {
+                d.extend(extra);
+            }
+            d
+        },
     }];
 
     // ---- pillowing ----
@@ -693,6 +752,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         surface_map: smap,
         stages,
         returned: returned.into(),
+        domain: "polycube".into(),
         seconds_total: t_all.elapsed().as_secs_f64(),
     })
 }

@@ -44,6 +44,7 @@ pub fn report_json(r: &HexResult) -> serde_json::Value {
         "volume": r.volume,
         "input_volume": r.input_volume,
         "returned": r.returned,
+        "domain": r.domain,
         "levels": r.levels,
         "surface_map": r.surface_map,
         "stages": r.stages,

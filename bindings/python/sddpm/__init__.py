@@ -115,7 +115,8 @@ class HexOptions(C.Structure):
     _fields_ = [("level", C.c_int32), ("min_level", C.c_uint32), ("max_level", C.c_uint32), ("threshold", C.c_double),
                 ("max_elements", C.c_size_t), ("feature_angle", C.c_double), ("pillow", C.c_bool),
                 ("smooth_iterations", C.c_uint32), ("optimise_passes", C.c_uint32), ("optimise_target", C.c_double),
-                ("hex_candidates", C.c_uint32), ("accept_unverified", C.c_bool)]
+                ("hex_candidates", C.c_uint32), ("accept_unverified", C.c_bool),
+                ("voxel_fallback", C.c_bool)]
 
 
 class HexQuality(C.Structure):

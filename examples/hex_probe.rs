@@ -1,0 +1,45 @@
+//! Mesh one input with a fixed context under hex-option variants and print the
+//! quality of each (issue 6 experiments):
+//! `cargo run --release --example hex_probe -- MESH LABELS [release_distance ...]`
+use sddpm::context::Context;
+use sddpm::diffusion::Model;
+use sddpm::mesh::{LoadOptions, TriMesh};
+use sddpm::pipeline::{run, ContextRequest, RunOptions};
+
+fn main() -> sddpm::Result<()> {
+    let a: Vec<String> = std::env::args().collect();
+    let mesh = TriMesh::load(std::path::Path::new(&a[1]), &LoadOptions::default())?;
+    let genus = mesh.validate()?.genus.unwrap();
+    if a[2].starts_with("voxel") {
+        let t = std::time::Instant::now();
+        let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &Default::default(), &mut sddpm::error::NoProgress)?;
+        let q = &r.quality;
+        println!(
+            "{}: elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} volume {:.4} vs {:.4} ({:.1} s)",
+            r.domain, q.elements, q.inverted, q.min, q.mean, r.hausdorff_relative, r.volume, r.input_volume, t.elapsed().as_secs_f64()
+        );
+        for s in &r.stages {
+            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {:.1} s {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.seconds, s.details.to_string().chars().take(300).collect::<String>());
+        }
+        sddpm::export::vtk::write_vtk_legacy(std::path::Path::new("/tmp/voxel_probe.vtk"), &r.mesh, "voxel", &[("scaled_jacobian", &r.scaled_jacobian)]).ok();
+        return Ok(());
+    }
+    let ctx = Context::parse(&a[2])?;
+    let model = Model::default_model()?;
+    let variants: Vec<f64> = a[3..].iter().map(|s| s.parse().unwrap()).collect();
+    for rd in if variants.is_empty() { vec![0.002] } else { variants } {
+        let mut o = RunOptions { spline: None, hex_candidates: 1, ..Default::default() };
+        o.hex.release_distance = rd;
+        let t = std::time::Instant::now();
+        let r = run(&model, &mesh, genus, &ContextRequest::Contexts(vec![ctx]), &o, &mut sddpm::error::NoProgress)?;
+        let q = &r.hex.quality;
+        println!(
+            "release {rd}: level {} elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} ({:.1} s)",
+            r.hex.level, q.elements, q.inverted, q.min, q.mean, r.hex.hausdorff_relative, t.elapsed().as_secs_f64()
+        );
+        for s in &r.hex.stages {
+            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.details);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,245 @@
+//! Grid-based all-hex meshing: the fallback of the hex stage when every polycube
+//! candidate's mesh keeps inverted elements.
+//!
+//! The input is filled on a regular voxel lattice in the working frame (the
+//! voxelisation of the automated mode's temporary volume), the voxel set is made
+//! well-composed (no two voxels that share only an edge or a vertex, so that its
+//! boundary is a 2-manifold), and the resolution is doubled until the voxel solid
+//! has the input's topology (one component, no cavity, the input's genus). The
+//! voxels become the hex elements; their boundary nodes are pulled onto the input
+//! surface in validity-preserving steps (as the polycube map's nodes are), and the
+//! usual quality steps follow: pillowing (which gives every boundary element one
+//! face on the surface, as the staircase leaves elements with two or three),
+//! smoothing and optimisation.
+//!
+//! This is the classical grid-based method (octree / voxel meshing with a
+//! boundary layer), not the polycube structure: its elements are not aligned
+//! with the part's features and sharp edges are followed only as closely as the
+//! element size allows. The main job uses it only when the polycube meshes fold,
+//! and says so (report.json "hex.domain": "voxel").
+
+use super::grid::lattice_hex;
+use super::map::{self, Role};
+use super::optimize::Work;
+use super::pipeline::{finish, relax_and_refit, working_frames, HexOptions, HexResult, Level, LevelReport, SurfaceMapReport};
+use super::topology;
+use super::{Affine, HexMesh};
+use crate::context::volume::{betti, voxelize};
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::mesh::TriMesh;
+use crate::polycube::VoxelGrid;
+use std::time::Instant;
+
+/// Make a voxel set well-composed by filling voxels: in every 2 x 2 square two
+/// diagonal voxels alone (occupied or empty), and in every 2 x 2 x 2 block two
+/// antipodal voxels alone, are the configurations whose boundary is not a manifold.
+/// Filling only adds volume, so the loop ends. Returns the voxels filled.
+pub fn make_well_composed(g: &mut VoxelGrid) -> usize {
+    let [nx, ny, nz] = g.dims;
+    let mut filled = 0;
+    let at = |g: &VoxelGrid, x: i64, y: i64, z: i64| g.at(x, y, z);
+    let inside = |x: i64, y: i64, z: i64| x >= 0 && y >= 0 && z >= 0 && (x as usize) < nx && (y as usize) < ny && (z as usize) < nz;
+    for _round in 0..64 {
+        let mut changed = 0;
+        for z in -1..nz as i64 {
+            for y in -1..ny as i64 {
+                for x in -1..nx as i64 {
+                    // the block's corners, index bit 0 = +x, bit 1 = +y, bit 2 = +z
+                    let c = |k: usize| [x + (k & 1) as i64, y + ((k >> 1) & 1) as i64, z + ((k >> 2) & 1) as i64];
+                    let occ: [bool; 8] = std::array::from_fn(|k| {
+                        let p = c(k);
+                        at(g, p[0], p[1], p[2])
+                    });
+                    let mut fill: Option<usize> = None;
+                    // 2 x 2 squares of the block (its six faces): diagonal pairs
+                    'faces: for axis in 0..3 {
+                        for side in 0..2 {
+                            let ks: Vec<usize> = (0..8).filter(|&k| (k >> axis) & 1 == side).collect();
+                            // ks in order: the two free bits enumerate a square; diagonal = ks[0]/ks[3], ks[1]/ks[2]
+                            let (a, b, cc, d) = (ks[0], ks[1], ks[2], ks[3]);
+                            if occ[a] == occ[d] && occ[b] == occ[cc] && occ[a] != occ[b] {
+                                // fill an empty voxel of the square that lies in the grid
+                                let empties = if occ[a] { [b, cc] } else { [a, d] };
+                                fill = empties.into_iter().find(|&k| {
+                                    let p = c(k);
+                                    inside(p[0], p[1], p[2])
+                                });
+                                if fill.is_some() {
+                                    break 'faces;
+                                }
+                            }
+                        }
+                    }
+                    if fill.is_none() {
+                        let n = occ.iter().filter(|&&o| o).count();
+                        for k in 0..8 {
+                            let anti = 7 - k;
+                            let lone_pair = n == 2 && occ[k] && occ[anti];
+                            let lone_hole = n == 6 && !occ[k] && !occ[anti];
+                            if lone_pair {
+                                // connect them through a face neighbour of k
+                                fill = [k ^ 1, k ^ 2, k ^ 4].into_iter().find(|&j| {
+                                    let p = c(j);
+                                    inside(p[0], p[1], p[2])
+                                });
+                            } else if lone_hole {
+                                fill = [k, anti].into_iter().find(|&j| {
+                                    let p = c(j);
+                                    inside(p[0], p[1], p[2])
+                                });
+                            }
+                            if fill.is_some() {
+                                break;
+                            }
+                        }
+                    }
+                    if let Some(k) = fill {
+                        let p = c(k);
+                        let i = g.idx(p[0] as usize, p[1] as usize, p[2] as usize);
+                        if !g.occ[i] {
+                            g.occ[i] = true;
+                            changed += 1;
+                        }
+                    }
+                }
+            }
+        }
+        filled += changed;
+        if changed == 0 {
+            break;
+        }
+    }
+    filled
+}
+
+/// Lowest voxel resolution (voxels along the longest bounding-box edge) the
+/// fallback tries; it doubles from there while the topology is wrong.
+pub const VOXEL_START_RESOLUTION: usize = 24;
+/// Highest voxel resolution the fallback tries.
+pub const VOXEL_MAX_RESOLUTION: usize = 192;
+
+/// The all-hex mesh of `surface` (mapped to user coordinates by `to_user`) from a
+/// voxel lattice; `genus` is the input's. Errors (MESHING_FAILED) when no
+/// resolution up to [`VOXEL_MAX_RESOLUTION`] within `opts.max_elements` elements has the input's topology.
+pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opts: &HexOptions, progress: &mut dyn Progress) -> Result<HexResult> {
+    let t_all = Instant::now();
+    if surface.triangles.is_empty() {
+        return Err(Error::InvalidArgument("the input surface has no triangles".into()));
+    }
+    if surface.vertices.iter().flatten().any(|v| !v.is_finite()) || !to_user.is_finite() || to_user.inverse().is_none() {
+        return Err(Error::InvalidArgument("non-finite coordinate or singular frame in the hex stage input".into()));
+    }
+    check_progress(progress, 0.0, "hex: voxel lattice")?;
+    let fr = working_frames(surface, to_user, opts)?;
+    let sw = &fr.sw;
+    let mut tried = Vec::new();
+    let mut res = VOXEL_START_RESOLUTION;
+    let (vol, filled) = loop {
+        let mut vol = voxelize(&sw.mesh, res)?;
+        let filled = make_well_composed(&mut vol.grid);
+        let (b0, b2, b1) = betti(&vol.grid);
+        let n = vol.grid.count();
+        tried.push(format!("{res}: {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
+        if b0 == 1 && b2 == 0 && b1 == genus && n <= opts.max_elements {
+            break (vol, filled);
+        }
+        if res >= VOXEL_MAX_RESOLUTION || n * 8 > opts.max_elements {
+            return Err(Error::MeshingFailed(format!(
+                "voxel meshing: no lattice of at most {VOXEL_MAX_RESOLUTION} voxels along the longest edge and {} elements has the input's topology (1 component, no cavity, genus {genus}); tried {}",
+                opts.max_elements,
+                tried.join("; ")
+            )));
+        }
+        res *= 2;
+    };
+    check_progress(progress, 0.2, "hex: voxel mapping")?;
+    let t0 = Instant::now();
+    let h = lattice_hex(&vol.grid, 0);
+    let sub = crate::polycube::primitive::SUB as f64;
+    // lattice_hex spaces nodes 1 / SUB apart; a voxel is vol.h wide
+    let pos: Vec<[f64; 3]> = h.node_lattice.iter().map(|c| std::array::from_fn(|a| vol.lo[a] + c[a] as f64 * vol.h)).collect();
+    debug_assert!(h.mesh.nodes.iter().zip(&h.node_lattice).all(|(p, c)| (p[0] * sub - c[0] as f64).abs() < 1e-9));
+    let masks = map::normal_masks(&h);
+    let n = pos.len();
+    let role: Vec<Role> = masks.iter().map(|&m| if m != 0 { Role::Free } else { Role::Interior }).collect();
+    let curve_nb = vec![Vec::new(); n];
+    let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
+    let mut work = Work {
+        mesh: HexMesh { nodes: pos, elements: h.mesh.elements.clone() },
+        role: role.clone(),
+        attach: vec![u32::MAX; n],
+        curve_nb: curve_nb.clone(),
+        bgraph: map::boundary_graph(n, &bquads),
+        nbr: Default::default(),
+        n2e: Default::default(),
+        target: vec![[vol.h; 3]; h.mesh.elements.len()],
+    };
+    let e = topology::edges(&h.mesh);
+    work.nbr = topology::node_neighbours(n, &e);
+    work.n2e = topology::node_elements(&h.mesh);
+    let mut fit_stats = Vec::new();
+    fit_stats.push(super::optimize::fit_to_surface(&mut work, sw, &bquads, opts.surface_relax_iterations, 0.2));
+    relax_and_refit(&mut work, sw, &bquads, opts, &mut fit_stats);
+    let inverted = super::quality::summarize(&super::quality::element_qualities(&work.mesh)).inverted;
+    let ne = work.mesh.elements.len();
+    let levels = vec![LevelReport {
+        level: 0,
+        nodes: n,
+        elements: ne,
+        deviation: None,
+        flipped_quads: 0,
+        inverted,
+        seconds: t0.elapsed().as_secs_f64(),
+    }];
+    let smap = SurfaceMapReport {
+        feature_curves: sw.features.curves.len(),
+        feature_corners: sw.features.corners.len(),
+        ..Default::default()
+    };
+    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role, curve_nb, bquads };
+    let details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "resolutions_tried": tried, "fit": fit_stats });
+    let mut r = finish(lv, vec![[vol.h; 3]; ne], smap, levels, details, &fr, opts, t_all, progress)?;
+    r.domain = format!("voxel {res}");
+    Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(dims: [usize; 3], on: &[[usize; 3]]) -> VoxelGrid {
+        let mut g = VoxelGrid::empty(dims);
+        for p in on {
+            let i = g.idx(p[0], p[1], p[2]);
+            g.occ[i] = true;
+        }
+        g
+    }
+
+    #[test]
+    fn edge_and_vertex_contacts_are_filled() {
+        // two voxels sharing an edge only
+        let mut g = grid([2, 2, 1], &[[0, 0, 0], [1, 1, 0]]);
+        assert!(make_well_composed(&mut g) >= 1);
+        assert_eq!(betti(&g), (1, 0, 0));
+        // two voxels sharing a vertex only
+        let mut g = grid([2, 2, 2], &[[0, 0, 0], [1, 1, 1]]);
+        assert!(make_well_composed(&mut g) >= 1);
+        assert_eq!(betti(&g).0, 1);
+        // a well-composed set is left alone
+        let mut g = grid([3, 3, 1], &[[0, 0, 0], [1, 0, 0], [1, 1, 0]]);
+        assert_eq!(make_well_composed(&mut g), 0);
+    }
+
+    #[test]
+    fn a_torus_gets_a_valid_voxel_mesh_of_genus_one() {
+        let torus = crate::mesh::tests::square_torus();
+        let r = build_voxel_hex_mesh(&torus, &Affine::similarity(1.0, [0.0; 3]), 1, &HexOptions::default(), &mut crate::error::NoProgress).unwrap();
+        assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
+        assert!(r.quality.min > 0.2, "{:?}", r.quality);
+        // volume within 3 % of the faceted torus (the boundary layer follows the surface)
+        let v = torus.signed_volume();
+        assert!((r.volume - v).abs() < 0.03 * v, "{} vs {v}", r.volume);
+        assert!(r.domain.starts_with("voxel"));
+    }
+}
