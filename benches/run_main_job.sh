@@ -34,6 +34,10 @@ for n in sorted(status):
     r = json.load(open(p))
     pc, h, sp = r["polycube"], r["hex"], r.get("spline") or {}
     labels = ",".join(x for x in pc["names"].split(",") if x != "null")
+    dom = h.get("domain", "polycube")
+    if dom != "polycube":
+        # every polycube mesh folded: the grid-based fallback's mesh was kept
+        labels = f"**{dom}** (polycube {labels} folded)"
     tris = r["input"].get("triangles", "")
     g = r["input"].get("genus", pc.get("genus", ""))
     meshed = len(h.get("candidates_meshed") or [])
