@@ -458,7 +458,7 @@ pub fn build_hex_for_polycube(
         }
     }
     // every polycube mesh folds (or none could be built): the grid-based fallback
-    let folded = best.as_ref().map_or(true, |(_, b)| b.quality.inverted > 0);
+    let folded = best.as_ref().is_none_or(|(_, b)| b.quality.inverted > 0);
     if hex_opts.voxel_fallback && folded {
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };

@@ -542,7 +542,7 @@ pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOpti
     let sx = if mirror { -sw_scale } else { sw_scale };
     let c = ubox.centre();
     let u_to_w = Affine::diagonal([sx, sw_scale, sw_scale], [-sx * c[0], -sw_scale * c[1], -sw_scale * c[2]]);
-    let to_w = u_to_w.after(&to_user);
+    let to_w = u_to_w.after(to_user);
     let w_to_u = u_to_w.inverse().expect("similarity");
     let mesh_w = TriMesh { vertices: mesh_n.vertices.iter().map(|&p| to_w.apply(p)).collect(), triangles: mesh_n.triangles.clone() };
     let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
