@@ -248,7 +248,12 @@ pub fn run(
         (true, _) => None,
         (false, _) if voxel => Some(format!(
             "every polycube candidate's hex mesh kept inverted elements (best: {}); the mesh comes from the grid-based fallback ({}), not from the polycube",
-            attempts.iter().filter(|a| a.candidate.is_some()).map(|a| format!("{} inverted for {}", a.inverted, a.context)).min().unwrap_or_else(|| "no mesh".into()),
+            attempts
+                .iter()
+                .filter(|a| a.candidate.is_some())
+                .min_by(|a, b| (a.inverted, -a.min_scaled_jacobian).partial_cmp(&(b.inverted, -b.min_scaled_jacobian)).unwrap_or(std::cmp::Ordering::Equal))
+                .map(|a| format!("{} inverted for {}", a.inverted, a.context))
+                .unwrap_or_else(|| "no mesh".into()),
             hex.domain
         )),
         (false, Some(e)) => Some(e),
@@ -438,19 +443,8 @@ pub fn build_hex_for_polycube(
                 continue;
             }
         };
-        attempts.push(HexAttempt {
-            candidate: Some(ci),
-            context: cand.context.names(),
-            min_scaled_jacobian: r.quality.min,
-            inverted: r.quality.inverted,
-            hausdorff_relative: r.hausdorff_relative,
-            seconds: th.elapsed().as_secs_f64(),
-        });
-        let better = match &best {
-            None => true,
-            Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
-        };
-        if better {
+        attempts.push(HexAttempt::of(Some(ci), cand.context.names(), &r, th));
+        if beats(&r, &best) {
             best = Some((ci, r));
         }
         if best.as_ref().is_some_and(|(_, b)| b.quality.inverted == 0 && b.quality.min >= 0.3) {
@@ -465,19 +459,8 @@ pub fn build_hex_for_polycube(
         let identity = Affine::similarity(1.0, [0.0; 3]);
         match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
             Ok(r) => {
-                attempts.push(HexAttempt {
-                    candidate: None,
-                    context: r.domain.clone(),
-                    min_scaled_jacobian: r.quality.min,
-                    inverted: r.quality.inverted,
-                    hausdorff_relative: r.hausdorff_relative,
-                    seconds: th.elapsed().as_secs_f64(),
-                });
-                let better = match &best {
-                    None => true,
-                    Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
-                };
-                if better {
+                attempts.push(HexAttempt::of(None, r.domain.clone(), &r, th));
+                if beats(&r, &best) {
                     // the candidate index stays the best polycube attempt's (or the first)
                     let ci = best.as_ref().map(|(c, _)| *c).or(order.first().copied()).unwrap_or(0);
                     best = Some((ci, r));
@@ -494,6 +477,27 @@ pub fn build_hex_for_polycube(
     match best {
         Some((candidate, hex)) => Ok((candidate, attempts, hex)),
         None => Err(last_err.unwrap_or_else(|| Error::Internal("no candidate to mesh".into()))),
+    }
+}
+
+/// Is `r` a better mesh than the best so far (fewer inverted elements, then a higher minimum scaled Jacobian)?
+fn beats(r: &HexResult, best: &Option<(usize, HexResult)>) -> bool {
+    match best {
+        None => true,
+        Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
+    }
+}
+
+impl HexAttempt {
+    fn of(candidate: Option<usize>, context: String, r: &HexResult, started: Instant) -> Self {
+        HexAttempt {
+            candidate,
+            context,
+            min_scaled_jacobian: r.quality.min,
+            inverted: r.quality.inverted,
+            hausdorff_relative: r.hausdorff_relative,
+            seconds: started.elapsed().as_secs_f64(),
+        }
     }
 }
 
