@@ -242,7 +242,7 @@ pub fn run(
     }
     order.truncate(opts.hex_candidates.max(1));
     let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
-    let voxel = hex.domain.starts_with("voxel");
+    let voxel = !hex.from_polycube();
     let verified = !voxel && pr.candidates[candidate].stage == crate::context::generate::Stage::Verified;
     let verification_error = match (verified, verification_error) {
         (true, _) => None,
@@ -251,7 +251,7 @@ pub fn run(
             attempts
                 .iter()
                 .filter(|a| a.candidate.is_some())
-                .min_by(|a, b| (a.inverted, -a.min_scaled_jacobian).partial_cmp(&(b.inverted, -b.min_scaled_jacobian)).unwrap_or(std::cmp::Ordering::Equal))
+                .min_by(|a, b| rank(a.inverted, a.min_scaled_jacobian).partial_cmp(&rank(b.inverted, b.min_scaled_jacobian)).unwrap_or(std::cmp::Ordering::Equal))
                 .map(|a| format!("{} inverted for {}", a.inverted, a.context))
                 .unwrap_or_else(|| "no mesh".into()),
             hex.domain
@@ -480,11 +480,16 @@ pub fn build_hex_for_polycube(
     }
 }
 
-/// Is `r` a better mesh than the best so far (fewer inverted elements, then a higher minimum scaled Jacobian)?
+/// How meshes are compared (smaller is better): fewer inverted elements, then a higher minimum scaled Jacobian.
+fn rank(inverted: usize, min_scaled_jacobian: f64) -> (usize, f64) {
+    (inverted, -min_scaled_jacobian)
+}
+
+/// Is `r` a better mesh than the best so far?
 fn beats(r: &HexResult, best: &Option<(usize, HexResult)>) -> bool {
     match best {
         None => true,
-        Some((_, b)) => (r.quality.inverted, -r.quality.min) < (b.quality.inverted, -b.quality.min),
+        Some((_, b)) => rank(r.quality.inverted, r.quality.min) < rank(b.quality.inverted, b.quality.min),
     }
 }
 

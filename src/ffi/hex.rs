@@ -196,7 +196,7 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
         };
         let mut p = CProgress { callback: progress, user_data };
         let (_, _, r) = build_hex_for_polycube(&result, &order, &pc.mesh, &hopts, &mut p)?;
-        let verified = verified && r.domain == "polycube";
+        let verified = verified && r.from_polycube();
         *out = Box::into_raw(Box::new(SddpmHexMesh {
             mesh: r.mesh.clone(),
             scaled_jacobian: r.scaled_jacobian.clone(),

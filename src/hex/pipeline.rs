@@ -235,7 +235,14 @@ pub struct HexResult {
     pub seconds_total: f64,
 }
 
-fn summary(m: &HexMesh) -> QualitySummary {
+impl HexResult {
+    /// Did the elements come from the polycube (not from the grid-based fallback)?
+    pub fn from_polycube(&self) -> bool {
+        self.domain == "polycube"
+    }
+}
+
+pub(crate) fn summary(m: &HexMesh) -> QualitySummary {
     summarize(&element_qualities(m))
 }
 
@@ -333,8 +340,11 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     // ---- frames ----
     let frame: BoxFrame = context_frame(&input.context).expect("valid context has cells");
     let grid = input.context.assemble();
-    let fr = working_frames(&input.surface, &input.to_user, opts)?;
-    let Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w } = fr;
+    let (fr, mesh_n) = working_frames(&input.surface, &input.to_user, opts)?;
+    // the surface in the caller's (normalised) frame, with the same features, for
+    // the polycube's plane fit and feature matching
+    let sn = Surface::new(mesh_n, fr.sw.features.clone());
+    let (sw, to_w, diag_w) = (&fr.sw, fr.to_w, fr.diag_w);
     let corr = if opts.use_correspondence { Correspondence::new(&input.correspondence) } else { None };
 
     // ---- levels ----
@@ -503,7 +513,6 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     }
     let lv = chosen.expect("a level is chosen");
     let targets = element_targets(&lv.h, &warp, &to_w);
-    let fr = Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w };
     finish(lv, targets, smap, levels, serde_json::json!({ "fit": fit_stats }), &fr, opts, t_all, progress)
 }
 
@@ -511,8 +520,6 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
 /// longest bounding-box edge of 2, mirrored when the map to the user frame reverses
 /// orientation), with its sharp features.
 pub(crate) struct Frames {
-    /// The surface in the frame the caller gave (normalised), with features.
-    pub sn: Surface,
     /// The surface in W, with features.
     pub sw: Surface,
     pub to_w: Affine,
@@ -522,7 +529,8 @@ pub(crate) struct Frames {
     pub diag_w: f64,
 }
 
-pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOptions) -> Result<Frames> {
+/// Also returns the surface in the caller's frame, outward oriented.
+pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOptions) -> Result<(Frames, TriMesh)> {
     let mut mesh_n = surface.clone();
     if mesh_n.signed_volume() < 0.0 {
         for t in mesh_n.triangles.iter_mut() {
@@ -548,10 +556,9 @@ pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOpti
     let features = detect_features(&mesh_w, opts.feature_angle, opts.corner_angle);
     let diag0 = Aabb::of_points(&mesh_w.vertices).diagonal();
     let features = prune_features(&mesh_w, features, opts.min_feature_length * diag0, opts.feature_median_angle);
-    let sn = Surface::new(mesh_n, features.clone());
     let sw = Surface::new(mesh_w, features);
     let diag_w = sw.bbox.diagonal();
-    Ok(Frames { sn, sw, to_w, w_to_u, mirror, sw_scale, diag_w })
+    Ok((Frames { sw, to_w, w_to_u, mirror, sw_scale, diag_w }, mesh_n))
 }
 
 /// The quality steps and the result, from the mapped mesh of the chosen level:
@@ -569,8 +576,7 @@ pub(crate) fn finish(
     t_all: Instant,
     progress: &mut dyn Progress,
 ) -> Result<HexResult> {
-    let Frames { sw, w_to_u, mirror, sw_scale, diag_w, .. } = fr;
-    let (sw, w_to_u, mirror, sw_scale, diag_w) = (sw, *w_to_u, *mirror, *sw_scale, *diag_w);
+    let (sw, w_to_u, mirror, sw_scale, diag_w) = (&fr.sw, fr.w_to_u, fr.mirror, fr.sw_scale, fr.diag_w);
     let level = lv.h.level;
     // ---- mapped mesh ----
     let mut work = Work {

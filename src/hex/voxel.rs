@@ -37,7 +37,6 @@ use std::time::Instant;
 pub fn make_well_composed(g: &mut VoxelGrid) -> usize {
     let [nx, ny, nz] = g.dims;
     let mut filled = 0;
-    let at = |g: &VoxelGrid, x: i64, y: i64, z: i64| g.at(x, y, z);
     let inside = |x: i64, y: i64, z: i64| x >= 0 && y >= 0 && z >= 0 && (x as usize) < nx && (y as usize) < ny && (z as usize) < nz;
     for _round in 0..64 {
         let mut changed = 0;
@@ -48,7 +47,7 @@ pub fn make_well_composed(g: &mut VoxelGrid) -> usize {
                     let c = |k: usize| [x + (k & 1) as i64, y + ((k >> 1) & 1) as i64, z + ((k >> 2) & 1) as i64];
                     let occ: [bool; 8] = std::array::from_fn(|k| {
                         let p = c(k);
-                        at(g, p[0], p[1], p[2])
+                        g.at(p[0], p[1], p[2])
                     });
                     let mut fill: Option<usize> = None;
                     // 2 x 2 squares of the block (its six faces): diagonal pairs
@@ -130,7 +129,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         return Err(Error::InvalidArgument("non-finite coordinate or singular frame in the hex stage input".into()));
     }
     check_progress(progress, 0.0, "hex: voxel lattice")?;
-    let fr = working_frames(surface, to_user, opts)?;
+    let (fr, _) = working_frames(surface, to_user, opts)?;
     let sw = &fr.sw;
     let mut tried = Vec::new();
     let mut res = VOXEL_START_RESOLUTION;
@@ -155,20 +154,17 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     check_progress(progress, 0.2, "hex: voxel mapping")?;
     let t0 = Instant::now();
     let h = lattice_hex(&vol.grid, 0);
-    let sub = crate::polycube::primitive::SUB as f64;
-    // lattice_hex spaces nodes 1 / SUB apart; a voxel is vol.h wide
+    // lattice coordinates -> the voxel lattice's corners in W
     let pos: Vec<[f64; 3]> = h.node_lattice.iter().map(|c| std::array::from_fn(|a| vol.lo[a] + c[a] as f64 * vol.h)).collect();
-    debug_assert!(h.mesh.nodes.iter().zip(&h.node_lattice).all(|(p, c)| (p[0] * sub - c[0] as f64).abs() < 1e-9));
     let masks = map::normal_masks(&h);
     let n = pos.len();
     let role: Vec<Role> = masks.iter().map(|&m| if m != 0 { Role::Free } else { Role::Interior }).collect();
-    let curve_nb = vec![Vec::new(); n];
     let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
     let mut work = Work {
         mesh: HexMesh { nodes: pos, elements: h.mesh.elements.clone() },
-        role: role.clone(),
+        role,
         attach: vec![u32::MAX; n],
-        curve_nb: curve_nb.clone(),
+        curve_nb: vec![Vec::new(); n],
         bgraph: map::boundary_graph(n, &bquads),
         nbr: Default::default(),
         n2e: Default::default(),
@@ -180,7 +176,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     let mut fit_stats = Vec::new();
     fit_stats.push(super::optimize::fit_to_surface(&mut work, sw, &bquads, opts.surface_relax_iterations, 0.2));
     relax_and_refit(&mut work, sw, &bquads, opts, &mut fit_stats);
-    let inverted = super::quality::summarize(&super::quality::element_qualities(&work.mesh)).inverted;
+    let inverted = super::pipeline::summary(&work.mesh).inverted;
     let ne = work.mesh.elements.len();
     let levels = vec![LevelReport {
         level: 0,
@@ -196,7 +192,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         feature_corners: sw.features.corners.len(),
         ..Default::default()
     };
-    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role, curve_nb, bquads };
+    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads };
     let details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "resolutions_tried": tried, "fit": fit_stats });
     let mut r = finish(lv, vec![[vol.h; 3]; ne], smap, levels, details, &fr, opts, t_all, progress)?;
     r.domain = format!("voxel {res}");
