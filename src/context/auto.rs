@@ -15,7 +15,7 @@
 //!    pre-check, are diffused in one batch and verified.
 
 use super::generate::{
-    diffuse_and_verify, finish, fit_score, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
+    diffuse_and_verify, finish, fit_score, fit_score_scaled, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
 use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
@@ -116,8 +116,12 @@ pub struct BoxResult {
     pub locals: Vec<LocalResult>,
     /// Global candidates with the input's genus (before the cap).
     pub candidates: usize,
-    /// Best global geometric fit.
+    /// Best global geometric fit (squared cell units of this box).
     pub best_fit: Option<f64>,
+    /// The same candidate's fit in squared units of a common length (the cell of a
+    /// 12-cell split of the part's bounding box by volume), which ranks the boxes:
+    /// see [`box_scale`].
+    pub best_fit_common: Option<f64>,
     /// Why this box cannot hold the input, if it cannot.
     pub refused: Option<String>,
 }
@@ -252,7 +256,7 @@ pub fn generate_auto(
         let ys = split_points(bb.min[1], bb.max[1], &r.y);
         let zs = split_points(bb.min[2], bb.max[2], &r.z);
         let subs = subregions(&vol, &xs, &ys, &zs, aopts.min_fill);
-        let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, refused: None };
+        let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, refused: None };
         let mut options: Vec<Vec<Primitive>> = Vec::new();
         for sub in &subs {
             let labels = match feasible(sub) {
@@ -351,15 +355,24 @@ pub fn generate_auto(
         }
         cands.sort_by(|a, b| a.1.total_cmp(&b.1));
         report.boxes[bi].best_fit = cands.first().map(|c| c.1);
+        // Boxes are compared in a common unit: the best of the box's few best-fitting
+        // candidates, measured with the box's cell widths scaled to that unit.
+        let scale = box_scale(bb.size(), report.boxes[bi].dims);
+        report.boxes[bi].best_fit_common = cands
+            .iter()
+            .take(aopts.local_keep.max(1) * 2)
+            .map(|(ctx, _)| fit_score_scaled(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES), scale))
+            .min_by(f64::total_cmp);
     }
     let best_overall = per_box.iter().filter_map(|c| c.first().map(|x| x.1)).fold(f64::INFINITY, f64::min);
+    let common = |bi: usize| report.boxes[bi].best_fit_common.unwrap_or(f64::INFINITY);
     let mut order: Vec<usize> = Vec::new();
     for (bi, cands) in per_box.iter().enumerate() {
-        if let Some(&(_, f)) = cands.first() {
+        if !cands.is_empty() {
             match order.first() {
                 None => order.push(bi),
                 Some(&c) => {
-                    if f < aopts.finer_box_factor * per_box[c][0].1 {
+                    if common(bi) < aopts.finer_box_factor * common(c) {
                         order.insert(0, bi);
                     } else {
                         order.push(bi);
@@ -370,7 +383,7 @@ pub fn generate_auto(
     }
     if order.len() > 1 {
         let first = order[0];
-        order[1..].sort_by(|&a, &b| per_box[a][0].1.total_cmp(&per_box[b][0].1));
+        order[1..].sort_by(|&a, &b| common(a).total_cmp(&common(b)));
         debug_assert_eq!(order[0], first);
     }
     if order.is_empty() {
@@ -457,6 +470,17 @@ pub fn generate_auto(
     timings.total = t_all.elapsed().as_secs_f64();
     let result = finish(input, input_genus, "auto", all_global, timings);
     Ok((result, report))
+}
+
+/// Per-axis factors that turn a box's grid (cell) units into a length common to
+/// every box: the part's extent along an axis over the box's cell count there,
+/// divided by the edge of a cube holding 1/12 of the bounding box's volume. A bar
+/// three times as long as it is thick measures the same in a 1-cell box (one
+/// stretched cell) and in a 3-cell box (three cube cells).
+pub fn box_scale(size: [f64; 3], dims: [usize; 3]) -> [f64; 3] {
+    let s = size.map(|x| x.max(1e-12));
+    let h = (s[0] * s[1] * s[2] / NUM_CELLS as f64).cbrt();
+    std::array::from_fn(|a| s[a] / dims[a] as f64 / h)
 }
 
 /// The temporary volume misses the surface's volume by at most this fraction, or
@@ -571,5 +595,45 @@ mod tests {
         // a cube is within the tolerance at once: no refinement
         let c = box_mesh(1.0, 1.0, 1.0);
         assert_eq!(temporary_volume(&c, 48, 1.0).unwrap().1, 48);
+    }
+
+    #[test]
+    fn box_scale_measures_every_box_in_the_same_length() {
+        // a 3 x 1 x 1 bar: one stretched cell and three cube cells both become
+        // cells of the bar's thickness (12-cell volume cube edge = (3/12)^(1/3))
+        let h = (3.0f64 / 12.0).cbrt();
+        let one = box_scale([3.0, 1.0, 1.0], [1, 1, 1]);
+        let three = box_scale([3.0, 1.0, 1.0], [3, 1, 1]);
+        for a in 0..3 {
+            assert!((three[a] - 1.0 / h).abs() < 1e-12, "{three:?}");
+        }
+        assert!((one[0] - 3.0 / h).abs() < 1e-12 && (one[1] - 1.0 / h).abs() < 1e-12, "{one:?}");
+    }
+
+    #[test]
+    fn a_three_cell_bar_fits_its_own_box_better_than_one_stretched_cell() {
+        // BHC+Y, THC+Z, BHC+Y in a row: in cell units of each box, the single
+        // stretched THC shrinks the blind holes below the fit's penalty threshold
+        // and the comparison favoured it; in the common unit the true box wins
+        let truth = Context::parse("BHC+Y,THC+Z,BHC+Y,0,0,0,0,0,0,0,0,0").unwrap();
+        let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
+        let input = prepare_input(&mesh, &PolycubeOptions::default()).unwrap();
+        let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+        let best = |ctx: &Context, dims: [usize; 3]| {
+            crate::polycube::orientation::rotations()
+                .iter()
+                .map(|r| {
+                    let pts: Vec<[f64; 3]> = fit_sub.iter().map(|s| r.apply(s.point)).collect();
+                    let size = crate::geometry::Aabb::of_points(&pts).size();
+                    fit_score_scaled(fit_sub, ctx, *r, &polycube_samples(ctx, FIT_SAMPLES), box_scale(size, dims))
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let own = best(&truth, [3, 1, 1]);
+        let stretched = ["THC+X", "THC+Y", "THC+Z"]
+            .iter()
+            .map(|l| best(&Context::parse(&format!("{l},0,0,0,0,0,0,0,0,0,0,0")).unwrap(), [1, 1, 1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(own < AutoOptions::default().finer_box_factor * stretched, "own box {own}, one stretched cell {stretched}");
     }
 }

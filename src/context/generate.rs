@@ -390,6 +390,15 @@ pub fn polycube_samples(ctx: &Context, n: usize) -> Vec<([f64; 3], usize)> {
 /// the score is the worst cell's. A missing, extra or misdirected hole in one cell
 /// shows up in full instead of being diluted by the other cells.
 pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)]) -> f64 {
+    fit_score_scaled(samples, ctx, rotation, target, [1.0; 3])
+}
+
+/// [`fit_score`] with the grid coordinates multiplied by `scale` per axis before the
+/// distances are taken: with the part's cell widths over a common length as the
+/// scale, fits of boxes with different cell counts become comparable (a single
+/// stretched cell is not favoured over three cells of the same part just because its
+/// cell is three times longer).
+pub fn fit_score_scaled(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> f64 {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
     let Some((frame, dlo, dhi)) = crate::polycube::inference::context_box(ctx) else { return f64::INFINITY };
     let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
@@ -408,8 +417,9 @@ pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotatio
         return f64::INFINITY;
     }
     let cells_in: Vec<usize> = mapped.iter().map(|q| crate::polycube::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
-    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| frame.to_grid(*q)).collect();
-    let tgt: Vec<[f64; 3]> = target.iter().map(|t| t.0).collect();
+    let scaled = |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|a| p[a] * scale[a]) };
+    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| scaled(frame.to_grid(*q))).collect();
+    let tgt: Vec<[f64; 3]> = target.iter().map(|t| scaled(t.0)).collect();
     let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
     let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
     let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
@@ -421,7 +431,7 @@ pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotatio
     }
     let mut sum_tg = [0.0f64; NUM_CELLS];
     let mut n_tg = [0usize; NUM_CELLS];
-    for (p, c) in target {
+    for (p, (_, c)) in tgt.iter().zip(target) {
         sum_tg[*c] += f(t_in.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
         n_tg[*c] += 1;
     }
