@@ -45,6 +45,10 @@ struct Row {
     verified: usize,
     auto_s: f64,
     user_verified: bool,
+    /// Where the user-guided run with the true context stopped (the stage of its
+    /// best candidate: Occupancy = refused by the pre-check, Gocc / Tcv = failed
+    /// there, Verified).
+    user_stage: String,
     user_s: f64,
 }
 
@@ -94,10 +98,12 @@ fn main() -> sddpm::Result<()> {
     let csv_path = a.get(3).cloned().unwrap_or_else(|| "build/recovery.csv".into());
     let groups: Vec<String> = a.get(4).map(|s| s.split(',').map(str::to_string).collect()).unwrap_or_else(|| GROUPS.iter().map(|g| g.0.to_string()).collect());
     assert_ne!(seed, 42, "42 is the training seed");
+    // RECOVERY_USER_ONLY=1: only the user-guided runs (seconds per case)
+    let user_only = std::env::var_os("RECOVERY_USER_ONLY").is_some();
     let model = Model::default_model()?;
     let popts = PolycubeOptions::default();
     let aopts = AutoOptions::default();
-    let mut csv = String::from("group,case,context,cells,genus,auto_verified,auto_recovered,auto_placed,hausdorff_cells,true_among_verified,true_among_candidates,global_candidates,kept,verified,auto_s,user_verified,user_s,chosen\n");
+    let mut csv = String::from("group,case,context,cells,genus,auto_verified,auto_recovered,auto_placed,hausdorff_cells,true_among_verified,true_among_candidates,global_candidates,kept,verified,auto_s,user_verified,user_stage,user_s,chosen\n");
     let mut summary = Vec::new();
     for (gi, &(name, lo, hi)) in GROUPS.iter().enumerate() {
         if !groups.iter().any(|g| g == name) {
@@ -114,7 +120,8 @@ fn main() -> sddpm::Result<()> {
             let mut r = Row::default();
             let t = Instant::now();
             let chosen;
-            match generate_polycube(&model, mesh, genus, &ContextRequest::Auto, &popts, &aopts, &mut NoProgress) {
+            let auto = if user_only { Err(sddpm::Error::Cancelled("user-guided runs only".into())) } else { generate_polycube(&model, mesh, genus, &ContextRequest::Auto, &popts, &aopts, &mut NoProgress) };
+            match auto {
                 Ok((pr, auto, _err)) => {
                     r.auto_s = t.elapsed().as_secs_f64();
                     if std::env::var_os("RECOVERY_VERBOSE").is_some() {
@@ -151,18 +158,23 @@ fn main() -> sddpm::Result<()> {
                 }
             }
             let t = Instant::now();
-            if let Ok((pr, _, _)) = generate_polycube(&model, mesh, genus, &ContextRequest::Contexts(vec![truth.clone()]), &popts, &aopts, &mut NoProgress) {
-                r.user_verified = pr.chosen.is_some();
+            match generate_polycube(&model, mesh, genus, &ContextRequest::Contexts(vec![truth.clone()]), &popts, &aopts, &mut NoProgress) {
+                Ok((pr, _, _)) => {
+                    r.user_verified = pr.chosen.is_some();
+                    let rank = |s: Stage| [Stage::Pending, Stage::Occupancy, Stage::Gocc, Stage::Tcv, Stage::Verified].iter().position(|x| *x == s).unwrap_or(0);
+                    r.user_stage = pr.candidates.iter().map(|c| c.stage).max_by_key(|s| rank(*s)).map(|s| format!("{s:?}")).unwrap_or_else(|| "none".into());
+                }
+                Err(e) => r.user_stage = format!("error: {e}"),
             }
             r.user_s = t.elapsed().as_secs_f64();
             let cells = truth.labels.iter().filter(|l| **l != sddpm::polycube::Primitive::Null).count();
             println!(
-                "{name} {i}: {truth} ({cells} cells, genus {genus}) | auto: {chosen}; recovered {} placed {} (Hausdorff {:.3} cell; true verified {}, among candidates {}), {} genus-consistent, {} kept, {} verified, {:.1} s | user-guided: {} {:.1} s",
-                r.auto_recovered, r.auto_placed, r.hausdorff_cells, r.true_among_verified, r.true_among_candidates, r.global_candidates, r.kept, r.verified, r.auto_s, r.user_verified, r.user_s
+                "{name} {i}: {truth} ({cells} cells, genus {genus}) | auto: {chosen}; recovered {} placed {} (Hausdorff {:.3} cell; true verified {}, among candidates {}), {} genus-consistent, {} kept, {} verified, {:.1} s | user-guided: {} ({}) {:.1} s",
+                r.auto_recovered, r.auto_placed, r.hausdorff_cells, r.true_among_verified, r.true_among_candidates, r.global_candidates, r.kept, r.verified, r.auto_s, r.user_verified, r.user_stage, r.user_s
             );
             let _ = writeln!(
                 csv,
-                "{name},{i},{},{cells},{genus},{},{},{},{:.3},{},{},{},{},{},{:.2},{},{:.2},\"{}\"",
+                "{name},{i},{},{cells},{genus},{},{},{},{:.3},{},{},{},{},{},{:.2},{},{},{:.2},\"{}\"",
                 truth.names(),
                 r.auto_verified,
                 r.auto_recovered,
@@ -175,6 +187,7 @@ fn main() -> sddpm::Result<()> {
                 r.verified,
                 r.auto_s,
                 r.user_verified,
+                r.user_stage,
                 r.user_s,
                 chosen.replace('"', "'")
             );
