@@ -17,6 +17,9 @@
 //! Prints one line per case, a Markdown table per group and writes a CSV.
 //!
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
+//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_USER_ONLY=1 runs
+//! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
+//! user-guided verification per cell)
 //! (defaults 8, 5000, build/recovery.csv, simple,medium,complex)
 use sddpm::context::auto::AutoOptions;
 use sddpm::context::generate::{PolycubeOptions, Stage};
@@ -101,7 +104,11 @@ fn main() -> sddpm::Result<()> {
     // RECOVERY_USER_ONLY=1: only the user-guided runs (seconds per case)
     let user_only = std::env::var_os("RECOVERY_USER_ONLY").is_some();
     let model = Model::default_model()?;
-    let popts = PolycubeOptions::default();
+    let mut popts = PolycubeOptions::default();
+    // RECOVERY_TAU_CD=x: TCV's threshold (VerifyOptions::tau_cd) for this run
+    if let Some(t) = std::env::var("RECOVERY_TAU_CD").ok().and_then(|s| s.parse().ok()) {
+        popts.verify.tau_cd = t;
+    }
     let aopts = AutoOptions::default();
     let mut csv = String::from("group,case,context,cells,genus,auto_verified,auto_recovered,auto_placed,hausdorff_cells,true_among_verified,true_among_candidates,global_candidates,kept,verified,auto_s,user_verified,user_stage,user_s,chosen\n");
     let mut summary = Vec::new();
@@ -161,6 +168,18 @@ fn main() -> sddpm::Result<()> {
             match generate_polycube(&model, mesh, genus, &ContextRequest::Contexts(vec![truth.clone()]), &popts, &aopts, &mut NoProgress) {
                 Ok((pr, _, _)) => {
                     r.user_verified = pr.chosen.is_some();
+                    if std::env::var_os("RECOVERY_VERBOSE").is_some() {
+                        for c in pr.candidates.iter().filter(|c| c.report.is_some()) {
+                            let rep = c.report.as_ref().unwrap();
+                            println!("  user-guided {} {}: {:?}", c.context, c.rotation, rep.reason);
+                            for cr in rep.cells.iter().filter(|cr| !cr.pcd.is_empty()) {
+                                let lab = sddpm::polycube::Primitive::parse(&cr.label).map(|p| p.label() as usize).unwrap_or(1);
+                                let target = cr.pcd.get(lab.saturating_sub(1)).copied().unwrap_or(f64::NAN);
+                                let min = cr.pcd.iter().copied().fold(f64::INFINITY, f64::min);
+                                println!("    cell {} {}: target PCD {target:.4}, nearest {:?} {min:.4}, inside {:.2}, pass {}", cr.cell, cr.label, cr.nearest, cr.inside_fraction, cr.pass);
+                            }
+                        }
+                    }
                     let rank = |s: Stage| [Stage::Pending, Stage::Occupancy, Stage::Gocc, Stage::Tcv, Stage::Verified].iter().position(|x| *x == s).unwrap_or(0);
                     r.user_stage = pr.candidates.iter().map(|c| c.stage).max_by_key(|s| rank(*s)).map(|s| format!("{s:?}")).unwrap_or_else(|| "none".into());
                 }
