@@ -17,7 +17,8 @@
 //! Prints one line per case, a Markdown table per group and writes a CSV.
 //!
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
-//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_USER_ONLY=1 runs
+//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_JOINT=1 turns on
+//! AutoOptions::joint_labels, RECOVERY_USER_ONLY=1 runs
 //! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
 //! user-guided verification per cell)
 //! (defaults 8, 5000, build/recovery.csv, simple,medium,complex)
@@ -109,7 +110,9 @@ fn main() -> sddpm::Result<()> {
     if let Some(t) = std::env::var("RECOVERY_TAU_CD").ok().and_then(|s| s.parse().ok()) {
         popts.verify.tau_cd = t;
     }
-    let aopts = AutoOptions::default();
+    let mut aopts = AutoOptions::default();
+    // RECOVERY_JOINT=1: AutoOptions::joint_labels on
+    aopts.joint_labels = std::env::var_os("RECOVERY_JOINT").is_some();
     let mut csv = String::from("group,case,context,cells,genus,auto_verified,auto_recovered,auto_placed,hausdorff_cells,true_among_verified,true_among_candidates,global_candidates,kept,verified,auto_s,user_verified,user_stage,user_s,chosen\n");
     let mut summary = Vec::new();
     for (gi, &(name, lo, hi)) in GROUPS.iter().enumerate() {

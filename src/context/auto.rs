@@ -15,7 +15,7 @@
 //!    pre-check, are diffused in one batch and verified.
 
 use super::generate::{
-    diffuse_and_verify, finish, fit_score, fit_score_scaled, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
+    diffuse_and_verify, finish, fit_score, fit_score_cells, fit_score_scaled, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
 use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
@@ -88,11 +88,17 @@ pub struct AutoOptions {
     pub max_boxes: usize,
     /// Sampler steps of the local single-cell diffusion (default 25).
     pub local_steps: usize,
+    /// Also choose the subregions' labels jointly on the global fit (coordinate
+    /// descent over the cells, every feasible label, from the local ranking; see
+    /// [`joint_labels`]) and add the valid assemblies of the input's genus it visits
+    /// to the box's candidates (default false: measured in BENCHMARKS.md "Context
+    /// search", not yet on the real meshes).
+    pub joint_labels: bool,
 }
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25 }
+        AutoOptions { resolution: 48, min_fill: 0.04, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false }
     }
 }
 
@@ -122,6 +128,8 @@ pub struct BoxResult {
     /// 12-cell split of the part's bounding box by volume), which ranks the boxes:
     /// see [`box_scale`].
     pub best_fit_common: Option<f64>,
+    /// Candidates added by the joint label search (`AutoOptions::joint_labels`).
+    pub joint_candidates: usize,
     /// Why this box cannot hold the input, if it cannot.
     pub refused: Option<String>,
 }
@@ -248,6 +256,7 @@ pub fn generate_auto(
     };
     // Per box: global candidates ranked by fit.
     let mut per_box: Vec<Vec<(Context, f64)>> = Vec::new();
+    let mut joint_lists: Vec<Option<(Vec<usize>, Vec<Vec<Primitive>>)>> = Vec::new();
     let mut local_jobs: Vec<LocalJob> = Vec::new();
     let t0 = Instant::now();
     for (bi, r) in shapes.iter().enumerate() {
@@ -256,8 +265,10 @@ pub fn generate_auto(
         let ys = split_points(bb.min[1], bb.max[1], &r.y);
         let zs = split_points(bb.min[2], bb.max[2], &r.z);
         let subs = subregions(&vol, &xs, &ys, &zs, aopts.min_fill);
-        let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, refused: None };
+        let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, joint_candidates: 0, refused: None };
         let mut options: Vec<Vec<Primitive>> = Vec::new();
+        // every feasible label of each subregion, best local fit first
+        let mut full: Vec<Vec<Primitive>> = Vec::new();
         for sub in &subs {
             let labels = match feasible(sub) {
                 Ok(l) => l,
@@ -269,6 +280,7 @@ pub fn generate_auto(
             let mut lr = LocalResult { subregion: sub.clone(), fits: Vec::new(), kept: Vec::new(), verified: Vec::new() };
             if labels == [Primitive::Null] {
                 lr.kept.push("null".into());
+                full.push(labels.clone());
                 options.push(labels);
                 br.locals.push(lr);
                 continue;
@@ -286,6 +298,7 @@ pub fn generate_auto(
                 })
                 .collect();
             scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+            full.push(scored.iter().map(|(p, _)| *p).collect());
             lr.fits = scored.iter().map(|(p, f)| (p.name().to_string(), *f)).collect();
             let best = scored[0].1;
             let kept: Vec<Primitive> = scored
@@ -303,6 +316,7 @@ pub fn generate_auto(
             options.push(kept);
             br.locals.push(lr);
         }
+        joint_lists.push(if br.refused.is_none() { Some((br.locals.iter().map(|l| l.subregion.cell).collect::<Vec<usize>>(), full)) } else { None });
         let mut cands: Vec<(Context, f64)> = Vec::new();
         if br.refused.is_none() {
             // Cells of the box sit at grid cells (0..nx, 0..ny, 0..nz); the rest are null.
@@ -352,6 +366,21 @@ pub fn generate_auto(
     for (bi, cands) in per_box.iter_mut().enumerate() {
         for (ctx, f) in cands.iter_mut() {
             *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES));
+        }
+        if aopts.joint_labels {
+            if let Some((cells, lists)) = &joint_lists[bi] {
+                let found = joint_labels(fit_sub, cells, lists, input_genus, JOINT_SWEEPS);
+                let before = cands.len();
+                for (ctx, f) in found {
+                    if !cands.iter().any(|(c, _)| c.labels == ctx.labels) {
+                        cands.push((ctx, f));
+                    }
+                }
+                report.boxes[bi].joint_candidates = cands.len() - before;
+                if cands.len() > before {
+                    report.boxes[bi].refused = None;
+                }
+            }
         }
         cands.sort_by(|a, b| a.1.total_cmp(&b.1));
         report.boxes[bi].best_fit = cands.first().map(|c| c.1);
@@ -470,6 +499,68 @@ pub fn generate_auto(
     timings.total = t_all.elapsed().as_secs_f64();
     let result = finish(input, input_genus, "auto", all_global, timings);
     Ok((result, report))
+}
+
+/// Most sweeps of [`joint_labels`] over the cells.
+pub const JOINT_SWEEPS: usize = 4;
+
+/// Joint choice of the subregions' labels on the global fit: starting from each
+/// subregion's best local label, each sweep visits the cells in turn and gives each
+/// the feasible label that lowers the sum of the per-cell fits (a sum, not the worst
+/// cell, so that a change in any cell counts), the others fixed; stops when a sweep
+/// changes nothing or after `sweeps`. Returns every visited context that is a
+/// valid assembly of the input's genus, with its (worst-cell) fit. Unlike the
+/// product of the locally kept labels, it does not depend on the local ranking of
+/// labels whose local fits are tied (a cell cut out of an assembly is far from every
+/// single-cell template; BENCHMARKS.md "Context search").
+pub fn joint_labels(samples: &[SurfaceSample], cells: &[usize], lists: &[Vec<Primitive>], input_genus: i64, sweeps: usize) -> Vec<(Context, f64)> {
+    let mut labels = [Primitive::Null; NUM_CELLS];
+    for (c, l) in cells.iter().zip(lists) {
+        labels[*c] = l.first().copied().unwrap_or(Primitive::Null);
+    }
+    let mut seen: std::collections::HashMap<[Primitive; NUM_CELLS], f64> = std::collections::HashMap::new();
+    let mut found: Vec<(Context, f64)> = Vec::new();
+    let mut eval = |l: [Primitive; NUM_CELLS], found: &mut Vec<(Context, f64)>| -> f64 {
+        if let Some(&v) = seen.get(&l) {
+            return v;
+        }
+        let ctx = Context::new(l);
+        let v = if ctx.occupied().next().is_none() {
+            f64::INFINITY
+        } else {
+            let per = fit_score_cells(samples, &ctx, AxisRotation::IDENTITY, &polycube_samples(&ctx, FIT_SAMPLES), [1.0; 3]);
+            let sum: f64 = per.iter().filter(|c| !c.is_nan()).sum();
+            let validity = ctx.validity();
+            if sum.is_finite() && validity.valid && validity.genus == Some(input_genus) {
+                found.push((ctx, per.iter().filter(|c| !c.is_nan()).fold(0.0, |w: f64, c| w.max(*c))));
+            }
+            sum
+        };
+        seen.insert(l, v);
+        v
+    };
+    let mut current = eval(labels, &mut found);
+    for _ in 0..sweeps {
+        let mut changed = false;
+        for (c, list) in cells.iter().zip(lists) {
+            for &p in list {
+                if p == labels[*c] {
+                    continue;
+                }
+                let mut l = labels;
+                l[*c] = p;
+                let v = eval(l, &mut found);
+                if v < current {
+                    (current, labels) = (v, l);
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    found
 }
 
 /// Per-axis factors that turn a box's grid (cell) units into a length common to
@@ -635,5 +726,34 @@ mod tests {
             .map(|l| best(&Context::parse(&format!("{l},0,0,0,0,0,0,0,0,0,0,0")).unwrap(), [1, 1, 1]))
             .fold(f64::INFINITY, f64::min);
         assert!(own < AutoOptions::default().finer_box_factor * stretched, "own box {own}, one stretched cell {stretched}");
+    }
+
+    #[test]
+    fn joint_labels_find_the_assembly_whatever_the_local_ranking() {
+        // a 3 x 1 x 1 bar with a blind hole at each end and a through hole in the
+        // middle; every cell's labels are listed worst first, as tied local fits can
+        // order them, and the joint search still finds the assembly
+        let truth = Context::parse("BHC-X,THC+Z,BHC+X,0,0,0,0,0,0,0,0,0").unwrap();
+        let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
+        let input = prepare_input(&mesh, &PolycubeOptions::default()).unwrap();
+        let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+        // put the samples in the grid's orientation (the working frame may permute axes)
+        let tgt = polycube_samples(&truth, FIT_SAMPLES);
+        let r = *crate::polycube::orientation::rotations().iter().min_by(|a, b| fit_score(fit_sub, &truth, **a, &tgt).total_cmp(&fit_score(fit_sub, &truth, **b, &tgt))).unwrap();
+        let samples: Vec<SurfaceSample> = fit_sub.iter().map(|s| SurfaceSample { point: r.apply(s.point), ..*s }).collect();
+        let solid: Vec<Primitive> = Primitive::solids().filter(|p| p.family() != Family::Thc).collect();
+        let through: Vec<Primitive> = Primitive::solids().filter(|p| p.family() == Family::Thc).collect();
+        let worst_first = |ps: &[Primitive], truth: Primitive| -> Vec<Primitive> {
+            let mut v: Vec<Primitive> = ps.iter().copied().filter(|p| *p != truth).collect();
+            v.push(truth);
+            v
+        };
+        let lists = vec![worst_first(&solid, truth.labels[0]), worst_first(&through, truth.labels[1]), worst_first(&solid, truth.labels[2])];
+        let found = joint_labels(&samples, &[0, 1, 2], &lists, 1, JOINT_SWEEPS);
+        let best = found.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("a genus-1 assembly");
+        assert!(crate::polycube::assembly::congruent(&best.0.assemble(), &truth.assemble()), "best {} ({:.4}) of {}", best.0, best.1, found.len());
+        assert!(best.1 < 0.01, "fit {}", best.1);
+        // the product of the best 3 local labels per cell would not contain it
+        assert!(lists.iter().any(|l| !l[..3].contains(l.last().unwrap())));
     }
 }

@@ -393,14 +393,11 @@ pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotatio
     fit_score_scaled(samples, ctx, rotation, target, [1.0; 3])
 }
 
-/// [`fit_score`] with the grid coordinates multiplied by `scale` per axis before the
-/// distances are taken: with the part's cell widths over a common length as the
-/// scale, fits of boxes with different cell counts become comparable (a single
-/// stretched cell is not favoured over three cells of the same part just because its
-/// cell is three times longer).
-pub fn fit_score_scaled(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> f64 {
+/// The per-cell values of [`fit_score_scaled`] (NaN for unoccupied cells, infinite
+/// when the mapping or a cell's input is empty).
+pub fn fit_score_cells(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> [f64; NUM_CELLS] {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
-    let Some((frame, dlo, dhi)) = crate::polycube::inference::context_box(ctx) else { return f64::INFINITY };
+    let Some((frame, dlo, dhi)) = crate::polycube::inference::context_box(ctx) else { return [f64::INFINITY; NUM_CELLS] };
     let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
     let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
     let mut lo = [f64::INFINITY; 3];
@@ -414,7 +411,7 @@ pub fn fit_score_scaled(samples: &[SurfaceSample], ctx: &Context, rotation: Axis
     let map = crate::polycube::inference::BoxMap { rotation: AxisRotation::IDENTITY, src_lo: lo, src_hi: hi, dst_lo: dlo, dst_hi: dhi };
     let mapped: Vec<[f64; 3]> = rotated.iter().map(|r| map.forward(*r)).collect();
     if mapped.is_empty() || target.is_empty() {
-        return f64::INFINITY;
+        return [f64::INFINITY; NUM_CELLS];
     }
     let cells_in: Vec<usize> = mapped.iter().map(|q| crate::polycube::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
     let scaled = |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|a| p[a] * scale[a]) };
@@ -435,15 +432,28 @@ pub fn fit_score_scaled(samples: &[SurfaceSample], ctx: &Context, rotation: Axis
         sum_tg[*c] += f(t_in.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
         n_tg[*c] += 1;
     }
-    let mut worst: f64 = 0.0;
+    let mut cells = [f64::NAN; NUM_CELLS];
     for c in 0..NUM_CELLS {
         if n_tg[c] == 0 {
             continue;
         }
         let a = if n_in[c] > 0 { sum_in[c] / n_in[c] as f64 } else { f64::INFINITY };
-        worst = worst.max(0.5 * (a + sum_tg[c] / n_tg[c] as f64));
+        cells[c] = 0.5 * (a + sum_tg[c] / n_tg[c] as f64);
     }
-    worst
+    cells
+}
+
+/// [`fit_score`] with the grid coordinates multiplied by `scale` per axis before the
+/// distances are taken: with the part's cell widths over a common length as the
+/// scale, fits of boxes with different cell counts become comparable (a single
+/// stretched cell is not favoured over three cells of the same part just because its
+/// cell is three times longer). The worst cell of [`fit_score_cells`].
+pub fn fit_score_scaled(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> f64 {
+    let cells = fit_score_cells(samples, ctx, rotation, target, scale);
+    if cells.iter().any(|c| c.is_infinite()) {
+        return f64::INFINITY;
+    }
+    cells.iter().filter(|c| !c.is_nan()).fold(0.0, |w: f64, c| w.max(*c))
 }
 
 /// Diffuse and verify the candidates that passed the pre-check (batched).
