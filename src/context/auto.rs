@@ -701,15 +701,21 @@ mod tests {
         assert!((one[0] - 3.0 / h).abs() < 1e-12 && (one[1] - 1.0 / h).abs() < 1e-12, "{one:?}");
     }
 
+    /// The fit samples of a context's exact surface, in the working frame.
+    fn exact_samples(ctx: &Context) -> Vec<SurfaceSample> {
+        let mesh = crate::polycube::boundary(&ctx.assemble()).to_trimesh();
+        let input = prepare_input(&mesh, &PolycubeOptions::default()).unwrap();
+        input.samples[..input.samples.len().min(FIT_SAMPLES)].to_vec()
+    }
+
     #[test]
     fn a_three_cell_bar_fits_its_own_box_better_than_one_stretched_cell() {
         // BHC+Y, THC+Z, BHC+Y in a row: in cell units of each box, the single
         // stretched THC shrinks the blind holes below the fit's penalty threshold
         // and the comparison favoured it; in the common unit the true box wins
         let truth = Context::parse("BHC+Y,THC+Z,BHC+Y,0,0,0,0,0,0,0,0,0").unwrap();
-        let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
-        let input = prepare_input(&mesh, &PolycubeOptions::default()).unwrap();
-        let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+        let samples = exact_samples(&truth);
+        let fit_sub = &samples[..];
         let best = |ctx: &Context, dims: [usize; 3]| {
             crate::polycube::orientation::rotations()
                 .iter()
@@ -734,9 +740,7 @@ mod tests {
         // middle; every cell's labels are listed worst first, as tied local fits can
         // order them, and the joint search still finds the assembly
         let truth = Context::parse("BHC-X,THC+Z,BHC+X,0,0,0,0,0,0,0,0,0").unwrap();
-        let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
-        let input = prepare_input(&mesh, &PolycubeOptions::default()).unwrap();
-        let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+        let fit_sub = &exact_samples(&truth)[..];
         // put the samples in the grid's orientation (the working frame may permute axes)
         let tgt = polycube_samples(&truth, FIT_SAMPLES);
         let r = *crate::polycube::orientation::rotations().iter().min_by(|a, b| fit_score(fit_sub, &truth, **a, &tgt).total_cmp(&fit_score(fit_sub, &truth, **b, &tgt))).unwrap();
