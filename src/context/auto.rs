@@ -363,6 +363,7 @@ pub fn generate_auto(
     // best fit is not beaten by a finer one by `finer_box_factor`, then the rest by fit.
     check_progress(progress, 0.3, "global candidates")?;
     let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    let mut joint_found: Vec<std::collections::HashSet<[Primitive; NUM_CELLS]>> = vec![Default::default(); per_box.len()];
     for (bi, cands) in per_box.iter_mut().enumerate() {
         for (ctx, f) in cands.iter_mut() {
             *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES));
@@ -372,6 +373,7 @@ pub fn generate_auto(
                 let found = joint_labels(fit_sub, cells, lists, input_genus, JOINT_SWEEPS);
                 let before = cands.len();
                 for (ctx, f) in found {
+                    joint_found[bi].insert(ctx.labels);
                     if !cands.iter().any(|(c, _)| c.labels == ctx.labels) {
                         cands.push((ctx, f));
                     }
@@ -464,8 +466,11 @@ pub fn generate_auto(
             // block's middle cell passed THC+X only, which no genus-3 row can use).
             let locals = &report.boxes[cb].locals;
             let unfiltered = per_box[cb].clone();
+            let joint = &joint_found[cb];
             per_box[cb].retain(|(ctx, _)| {
-                locals.iter().all(|l| {
+                // the joint search chose its labels on the global fit; the local
+                // results do not overrule it
+                joint.contains(&ctx.labels) || locals.iter().all(|l| {
                     let lab = ctx.labels[l.subregion.cell];
                     lab == Primitive::Null
                         || l.verified.is_empty()
