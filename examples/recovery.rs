@@ -80,19 +80,7 @@ fn hausdorff(a: &TriMesh, b: &TriMesh) -> f64 {
 /// The input's cell width: sqrt(input area / area of the true assembly in cell units).
 fn cell_width(truth: &sddpm::context::Context, mesh: &TriMesh) -> f64 {
     let exact = sddpm::polycube::boundary(&truth.assemble()).area();
-    (mesh_area(mesh) / exact).sqrt()
-}
-
-fn mesh_area(m: &TriMesh) -> f64 {
-    m.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
-            let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
-            let x = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-            0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
-        })
-        .sum()
+    (mesh.check().area / exact).sqrt()
 }
 
 fn main() -> sddpm::Result<()> {
