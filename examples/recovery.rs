@@ -18,7 +18,8 @@
 //!
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
 //! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_JOINT=1 turns on
-//! AutoOptions::joint_labels, RECOVERY_USER_ONLY=1 runs
+//! AutoOptions::joint_labels, RECOVERY_DIAG=1 prints where each true placement
+//! stands in the automated search, RECOVERY_USER_ONLY=1 runs
 //! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
 //! user-guided verification per cell)
 //! (defaults 8, 5000, build/recovery.csv, simple,medium,complex)
@@ -83,6 +84,40 @@ fn cell_width(truth: &sddpm::context::Context, mesh: &TriMesh) -> f64 {
     (mesh.check().area / exact).sqrt()
 }
 
+/// RECOVERY_DIAG=1: where is the truth lost? Every placement of the true assembly
+/// in the automated mode's working frame (the 24 rotations that fit the grid): its
+/// fit against the best candidate's, its validity, the local rank of each true
+/// label in the box of its dimensions, and whether the pre-check passes it.
+fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, auto: Option<&sddpm::context::auto::AutoReport>) -> sddpm::Result<()> {
+    use sddpm::context::generate::{fit_score, fit_score_cells, polycube_samples, precheck, prepare_input, without_fit_limit, OrientationSearch, FIT_SAMPLES};
+    use sddpm::polycube::orientation::AxisRotation;
+    let input = prepare_input(mesh, popts)?;
+    let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    let best = pr.candidates.iter().map(|c| c.fit).fold(f64::INFINITY, f64::min);
+    println!("  diag: best candidate fit {best:.4}; boxes tried in order: {:?}", auto.map(|a| a.chosen_box));
+    let mut o = without_fit_limit(popts);
+    o.orientations = OrientationSearch::Identity;
+    for (r, c) in truth.rotations() {
+        let tgt = polycube_samples(&c, FIT_SAMPLES);
+        let fit = fit_score(fit_sub, &c, AxisRotation::IDENTITY, &tgt);
+        let cells = fit_score_cells(fit_sub, &c, AxisRotation::IDENTITY, &tgt, [1.0; 3]);
+        let dims = sddpm::polycube::assembly::occupied_cell_box(&c.labels).map(|(lo, hi)| [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]]).unwrap();
+        let pc = precheck(&input, &c, &o)?;
+        let occ = pc.first().map(|x| format!("{:?} in-empty {:.3} starved {:?}", x.stage, x.occupancy.in_empty_cells, x.occupancy.starved_cells)).unwrap_or_default();
+        let mut ranks = Vec::new();
+        if let Some(b) = auto.and_then(|a| a.boxes.iter().find(|b| b.dims == dims)) {
+            for l in &b.locals {
+                let lab = c.labels[l.subregion.cell].name();
+                let rank = l.fits.iter().position(|f| f.0 == lab);
+                ranks.push(format!("c{} {lab} g{} rank {:?}/{} kept {}", l.subregion.cell, l.subregion.genus, rank, l.fits.len(), l.kept.iter().any(|k| k == lab)));
+            }
+        }
+        let worst: Vec<String> = cells.iter().enumerate().filter(|(_, v)| !v.is_nan()).map(|(i, v)| format!("{i}:{v:.4}")).collect();
+        println!("  diag: truth {} as {c} box {dims:?}: fit {fit:.4} cells [{}] | precheck {occ} | {}", r.name(), worst.join(" "), ranks.join("; "));
+    }
+    Ok(())
+}
+
 fn main() -> sddpm::Result<()> {
     let a: Vec<String> = std::env::args().collect();
     let n: usize = a.get(1).map(|s| s.parse().expect("CASES_PER_GROUP")).unwrap_or(8);
@@ -132,6 +167,9 @@ fn main() -> sddpm::Result<()> {
                         for c in &pr.candidates {
                             println!("  cand {} {} fit {:.4} {:?} score {:?}", c.context, c.rotation, c.fit, c.stage, c.score);
                         }
+                    }
+                    if std::env::var_os("RECOVERY_DIAG").is_some() {
+                        diagnose(truth, mesh, &popts, &pr, auto.as_ref())?;
                     }
                     r.global_candidates = auto.as_ref().map(|a| a.boxes.iter().map(|b| b.candidates).sum()).unwrap_or(0);
                     r.kept = pr.candidates.len();

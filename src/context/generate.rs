@@ -302,28 +302,37 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
     for (k, occ, fit) in ranked.into_iter().take(keep) {
         let r = rots[k];
         let ok = passes(&occ) && fit <= opts.max_fit;
-        let input_t = if ok {
-            let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
-            Some(prepare(&input.samples, ctx, r, opts.min_occupied_fraction, &mut rng)?)
-        } else {
-            None
-        };
         out.push(Candidate {
             context: *ctx,
             labels: ctx.label_values(),
             rotation: r.name(),
             axis_rotation: r,
-            occupancy: input_t.as_ref().map(|i| i.occupancy.clone()).unwrap_or(occ),
+            occupancy: occ,
             fit,
             stage: if ok { Stage::Pending } else { Stage::Occupancy },
             report: None,
             fidelity: None,
             score: None,
-            input: input_t,
+            input: None,
             output: None,
         });
     }
     Ok(out)
+}
+
+/// Lay out the inference input (all samples mapped onto the context's box, see
+/// [`prepare`]) of every pending candidate that has none yet: called after the fit
+/// limit ([`limit_fit`]), so that the candidates it refuses are never laid out.
+/// The candidate's occupancy becomes the one measured on all samples.
+pub fn lay_out(input: &PreparedInput, cands: &mut [Candidate], opts: &PolycubeOptions) -> Result<()> {
+    for c in cands.iter_mut().filter(|c| c.stage == Stage::Pending && c.input.is_none()) {
+        let k = rotations().iter().position(|r| *r == c.axis_rotation).unwrap_or(0);
+        let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
+        let t = prepare(&input.samples, &c.context, c.axis_rotation, opts.min_occupied_fraction, &mut rng)?;
+        c.occupancy = t.occupancy.clone();
+        c.input = Some(t);
+    }
+    Ok(())
 }
 
 /// The options of a pre-check that refuses on occupancy only (the fit limit is
@@ -531,6 +540,7 @@ pub fn generate_from_contexts(
         cands.extend(precheck(&input, c, &without_fit_limit(opts))?);
     }
     limit_fit(&mut cands, opts, f64::INFINITY);
+    lay_out(&input, &mut cands, opts)?;
     timings.precheck = t0.elapsed().as_secs_f64();
     diffuse_and_verify(model, &mut cands, opts, progress, &mut timings)?;
     timings.total = t_all.elapsed().as_secs_f64();

@@ -168,6 +168,49 @@ impl Context {
     pub fn validity(&self) -> Validity {
         check(&self.assemble())
     }
+
+    /// The same assembly turned by `r` (new axis `a` = sign * old axis `perm[a]`)
+    /// and moved to the grid's first cell: cells move with the rotation and each
+    /// label's hole axis and opening side turn with it. `None` when the rotated
+    /// occupied box does not fit the 3 x 2 x 2 grid, or nothing is occupied.
+    pub fn rotated(&self, r: crate::polycube::orientation::AxisRotation) -> Option<Context> {
+        let (lo, hi) = crate::polycube::assembly::occupied_cell_box(&self.labels)?;
+        let d: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a]);
+        let grid = [3usize, 2, 2];
+        if (0..3).any(|k| d[r.perm[k]] > grid[k]) {
+            return None;
+        }
+        let mut out = [Primitive::Null; NUM_CELLS];
+        for n in self.occupied() {
+            let c = cell_coords(n);
+            let old: [usize; 3] = std::array::from_fn(|a| c[a] - lo[a]);
+            let new: [usize; 3] = std::array::from_fn(|k| if r.sign[k] > 0 { old[r.perm[k]] } else { d[r.perm[k]] - 1 - old[r.perm[k]] });
+            let p = self.labels[n];
+            let label = match p.hole() {
+                None => p,
+                Some((axis, side)) => {
+                    let k = (0..3).find(|&k| r.perm[k] == axis).expect("a permutation");
+                    Primitive::from_hole(p.family(), k, side * r.sign[k] as i32)
+                }
+            };
+            out[crate::polycube::primitive::cell_index(new[0], new[1], new[2])] = label;
+        }
+        Some(Context::new(out))
+    }
+
+    /// Every distinct placement of this assembly at the grid's first cell under the
+    /// 24 proper rotations that fits the grid (each congruent to `self`).
+    pub fn rotations(&self) -> Vec<(crate::polycube::orientation::AxisRotation, Context)> {
+        let mut v: Vec<(crate::polycube::orientation::AxisRotation, Context)> = Vec::new();
+        for r in crate::polycube::orientation::rotations() {
+            if let Some(c) = self.rotated(*r) {
+                if !v.iter().any(|(_, x)| *x == c) {
+                    v.push((*r, c));
+                }
+            }
+        }
+        v
+    }
 }
 
 impl std::fmt::Display for Context {
@@ -432,6 +475,34 @@ pub fn valid_cube_occupancies() -> &'static [bool; 4096] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_rotated_context_assembles_the_same_solid_turned() {
+        use crate::polycube::assembly::congruent;
+        use crate::polycube::orientation::rotations;
+        // an L of three cells with a blind hole, a through hole and a cube
+        let c = Context::parse("BHC+X,THC+Z,0,Cube,0,0,0,0,0,0,0,0").unwrap();
+        let solid = c.assemble();
+        let mut fits = 0;
+        for r in rotations() {
+            let Some(t) = c.rotated(*r) else { continue };
+            fits += 1;
+            assert!(congruent(&t.assemble(), &solid), "{} under {}", t, r.name());
+            assert_eq!(t.validity().genus, c.validity().genus);
+            // the rotated sub-voxels are the original's turned: check one explicit case
+            // by the hole axes (a quarter turn about Z maps X to Y)
+        }
+        assert!(fits >= 4, "{fits}");
+        // a quarter turn about Z: new x = -old y, new y = old x
+        let quarter = rotations().iter().find(|r| r.perm == [1, 0, 2] && r.sign == [-1, 1, 1]).unwrap();
+        let t = c.rotated(*quarter).unwrap();
+        // old X-blind hole opening towards +X now opens towards +Y; THC+Z stays
+        assert!(t.labels.contains(&Primitive::BhcPy) && t.labels.contains(&Primitive::ThcZ), "{t}");
+        // three cells of a 3-long row do not fit 2 cells along Y after a quarter turn
+        let row = Context::parse("Cube,Cube,Cube,0,0,0,0,0,0,0,0,0").unwrap();
+        assert!(row.rotated(*quarter).is_none());
+        assert!(row.rotations().iter().all(|(_, x)| congruent(&x.assemble(), &row.assemble())));
+    }
 
     #[test]
     fn loose_constraints_are_refused_not_enumerated_forever() {
