@@ -91,7 +91,9 @@ pub struct AutoOptions {
     /// A finer box is preferred only when its fit beats the coarsest acceptable box's
     /// by this factor (default 0.8).
     pub finer_box_factor: f64,
-    /// Boxes tried (best first) before giving up (default 2).
+    /// Boxes tried (best first) before giving up (default 2); a box none of whose
+    /// candidates passes the pre-check and the fit limit is passed over and not
+    /// counted.
     pub max_boxes: usize,
     /// Sampler steps of the local single-cell diffusion (default 25).
     pub local_steps: usize,
@@ -330,6 +332,10 @@ pub fn generate_auto(
                 br.locals.push(lr);
             }
         }
+        if br.refused.is_none() {
+            trim_to_budget(&mut options, &mut br.locals, MAX_COMBINATIONS);
+            local_jobs.retain(|j| j.boxi != bi || options[j.local].contains(&j.label));
+        }
         joint_lists.push(if br.refused.is_none() { Some((br.locals.iter().map(|l| l.subregion.cell).collect::<Vec<usize>>(), full)) } else { None });
         let mut cands: Vec<(Context, f64)> = Vec::new();
         if br.refused.is_none() {
@@ -346,7 +352,7 @@ pub fn generate_auto(
                     }
                 }
                 combos = next;
-                if combos.len() > 20_000 {
+                if combos.len() > MAX_COMBINATIONS {
                     br.refused = Some(format!("{} label combinations; use --ratios with fewer cells", combos.len()));
                     combos.clear();
                     break;
@@ -441,8 +447,33 @@ pub fn generate_auto(
     }
     // Try the boxes in that order (at most `max_boxes`) until one yields a verified polycube.
     let mut all_global: Vec<Candidate> = Vec::new();
-    for (attempt, &cb) in order.iter().take(aopts.max_boxes.max(1)).enumerate() {
+    let mut attempt = 0usize;
+    // candidates of the boxes passed over, kept when no box is tried at all (the
+    // main job can still mesh the best-fitting of them, see pipeline::fallback_order)
+    let mut passed_over: Vec<Candidate> = Vec::new();
+    let mut o_global = opts.clone();
+    o_global.orientations = OrientationSearch::Identity;
+    for &cb in order.iter() {
+        if attempt >= aopts.max_boxes.max(1) {
+            break;
+        }
+        // A box none of whose candidates the fit limit would admit (they all fit far
+        // worse than another box's best) is passed over without using up an attempt
+        // or running its local stage.
+        let mut probe: Vec<Candidate> = Vec::new();
+        for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
+            probe.extend(precheck(&input, ctx, &without_fit_limit(&o_global))?);
+        }
+        limit_fit(&mut probe, &o_global, best_overall);
+        if !probe.iter().any(|c| c.stage == Stage::Pending) {
+            passed_over.extend(probe);
+            if report.boxes[cb].refused.is_none() {
+                report.boxes[cb].refused = Some(format!("no candidate passes the occupancy pre-check and the fit limit (best fit {:.4}, best of all boxes {best_overall:.4})", report.boxes[cb].best_fit.unwrap_or(f64::INFINITY)));
+            }
+            continue;
+        }
         let span = 0.35 + 0.6 * attempt as f64 / aopts.max_boxes.max(1) as f64;
+        attempt += 1;
         report.chosen_box = Some(report.boxes[cb].dims);
         // Local single-cell diffusion + verification for this box's kept labels (one batch).
         let jobs: Vec<&LocalJob> = local_jobs.iter().filter(|j| j.boxi == cb).collect();
@@ -502,13 +533,12 @@ pub fn generate_auto(
             }
         }
         let mut global: Vec<Candidate> = Vec::new();
-        let mut o = opts.clone();
-        o.orientations = OrientationSearch::Identity;
+        let o = &o_global;
         for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
-            global.extend(precheck(&input, ctx, &without_fit_limit(&o))?);
+            global.extend(precheck(&input, ctx, &without_fit_limit(o))?);
         }
-        limit_fit(&mut global, &o, best_overall);
-        lay_out(&input, &mut global, &o)?;
+        limit_fit(&mut global, o, best_overall);
+        lay_out(&input, &mut global, o)?;
         let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / aopts.max_boxes.max(1) as f64, s);
         diffuse_and_verify(model, &mut global, opts, &mut sub_progress, &mut timings)?;
         let done = global.iter().any(|c| c.stage == Stage::Verified);
@@ -516,6 +546,9 @@ pub fn generate_auto(
         if done {
             break;
         }
+    }
+    if attempt == 0 {
+        all_global = passed_over;
     }
     timings.total = t_all.elapsed().as_secs_f64();
     let result = finish(input, input_genus, "auto", all_global, timings);
@@ -558,6 +591,37 @@ pub fn in_context_fits(samples: &[SurfaceSample], subs: &[Subregion], labels: &[
         out[i][k] = v;
     }
     out
+}
+
+/// Most label combinations (products of the kept labels) enumerated per box.
+pub const MAX_COMBINATIONS: usize = 20_000;
+
+/// Keep the product of the subregions' kept labels within `budget`: while it is
+/// larger, drop the kept label whose in-context fit is worst relative to its
+/// cell's best (the least plausible alternative of all cells; a cell keeps at
+/// least its best label, and null stays where it is allowed). A full 3 x 2 x 2
+/// box of genus-0 cells keeps 3^12 = 531,441 products otherwise, which refused
+/// every part of seven or more cells.
+fn trim_to_budget(options: &mut [Vec<Primitive>], locals: &mut [LocalResult], budget: usize) {
+    loop {
+        let product: f64 = options.iter().map(|o| o.len().max(1) as f64).product();
+        if product <= budget as f64 {
+            break;
+        }
+        // (cell, fit of its worst kept label over its best)
+        let pick = (0..options.len())
+            .filter_map(|i| {
+                let k = options[i].iter().filter(|p| **p != Primitive::Null).count();
+                let fits = &locals[i].fits;
+                (k >= 2 && fits.len() >= k).then(|| (i, fits[k - 1].1 / fits[0].1.max(1e-12)))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((i, _)) = pick else { break };
+        let k = options[i].iter().filter(|p| **p != Primitive::Null).count();
+        let drop = Primitive::parse(&locals[i].fits[k - 1].0).ok();
+        options[i].retain(|p| Some(*p) != drop);
+        locals[i].kept.retain(|n| Some(n.as_str()) != drop.map(|d| d.name()));
+    }
 }
 
 /// Most sweeps of [`joint_labels`] over the cells.
@@ -664,7 +728,18 @@ pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Erro
     if result.chosen.is_some() {
         return None;
     }
-    let b = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box)?;
+    let Some(b) = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box) else {
+        // no box was tried: every box was refused or passed over
+        // boxes that had candidates (passed over on the fit limit) first
+        let mut boxes: Vec<&BoxResult> = report.boxes.iter().filter(|b| b.refused.is_some()).collect();
+        boxes.sort_by_key(|b| b.candidates == 0);
+        let mut why: Vec<String> = boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
+        why.truncate(6);
+        return Some(Error::VerificationFailed(format!(
+            "automated mode diffused no candidate: no occupied box has one that passes the occupancy pre-check and the fit limit ({}); the part may not be a polycube of the 3x2x2 grid, or try splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2)",
+            why.join("; ")
+        )));
+    };
     let failed: Vec<String> = b
         .locals
         .iter()
@@ -857,5 +932,32 @@ mod tests {
         assert!(e.contains("cell 5") && e.contains("genus 2"), "{e}");
         // empty: null only
         assert_eq!(feasible(&subregion(5, 0.01, 1), o.null_fill).unwrap(), vec![Primitive::Null]);
+    }
+
+    #[test]
+    fn a_full_box_is_trimmed_to_the_budget_keeping_every_cells_best_label() {
+        // twelve genus-0 cells with three kept labels each: 3^12 products
+        let names = ["BHC+X", "BHC-Y", "cube"];
+        let mut options: Vec<Vec<Primitive>> = Vec::new();
+        let mut locals: Vec<LocalResult> = Vec::new();
+        for c in 0..NUM_CELLS {
+            // cell c's alternatives are (2 + c) and (3 + c) times worse than its best
+            let fits: Vec<(String, f64)> = names.iter().enumerate().map(|(k, n)| (n.to_string(), if k == 0 { 0.01 } else { 0.01 * (k + 1 + c) as f64 })).collect();
+            options.push(names.iter().map(|n| Primitive::parse(n).unwrap()).collect());
+            locals.push(LocalResult { subregion: subregion(c, 0.9, 0), fits, kept: names.iter().map(|n| n.to_string()).collect(), verified: Vec::new() });
+        }
+        // one thin cell that may also be null
+        options[0].push(Primitive::Null);
+        locals[0].kept.push("null".into());
+        trim_to_budget(&mut options, &mut locals, MAX_COMBINATIONS);
+        let product: usize = options.iter().map(|o| o.len()).product();
+        assert!(product <= MAX_COMBINATIONS && product > MAX_COMBINATIONS / 3, "{product}");
+        for (o, l) in options.iter().zip(&locals) {
+            assert_eq!(o[0], Primitive::BhcPx, "every cell keeps its best label");
+            assert_eq!(o.len(), l.kept.len());
+        }
+        assert!(options[0].contains(&Primitive::Null));
+        // the least plausible alternatives (the last cells') went first
+        assert!(options[NUM_CELLS - 1].len() <= options[1].len(), "{:?}", options.iter().map(|o| o.len()).collect::<Vec<_>>());
     }
 }

@@ -607,4 +607,30 @@ mod tests {
         limit_fit(&mut c, &PolycubeOptions::default(), f64::INFINITY);
         assert_eq!(stages(&c), [Stage::Occupancy]);
     }
+
+    #[test]
+    fn only_candidates_the_fit_limit_admits_are_laid_out() {
+        // a through-hole cube input; contexts with the hole (fit) and without (refused)
+        let truth = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+        let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
+        let opts = PolycubeOptions::default();
+        let input = prepare_input(&mesh, &opts).unwrap();
+        let mut cands = Vec::new();
+        for c in ["THC+X,0,0,0,0,0,0,0,0,0,0,0", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "Cube,0,0,0,0,0,0,0,0,0,0,0", "Cube,Cube,0,0,0,0,0,0,0,0,0,0"] {
+            cands.extend(precheck(&input, &Context::parse(c).unwrap(), &without_fit_limit(&opts)).unwrap());
+        }
+        // the pre-check lays out nothing
+        assert!(cands.iter().all(|c| c.input.is_none()));
+        limit_fit(&mut cands, &opts, f64::INFINITY);
+        lay_out(&input, &mut cands, &opts).unwrap();
+        let pending = cands.iter().filter(|c| c.stage == Stage::Pending).count();
+        assert!(pending >= 1 && pending < cands.len(), "{:?}", cands.iter().map(|c| (c.context.to_string(), c.fit, c.stage)).collect::<Vec<_>>());
+        for c in &cands {
+            // laid out exactly when admitted, with the occupancy of all samples
+            assert_eq!(c.input.is_some(), c.stage == Stage::Pending, "{} {:?}", c.context, c.stage);
+            if let Some(i) = &c.input {
+                assert_eq!(i.occupancy.area_fraction, c.occupancy.area_fraction);
+            }
+        }
+    }
 }
