@@ -4,7 +4,7 @@
 //! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
 //!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
 //!    aligned bounding box into subregions, measure each one's genus, and take its
-//!    feasible labels (empty -> null; genus 0 -> cube and the six BHC; genus 1 ->
+//!    feasible labels (empty -> null; genus 0 -> cube, the six BHC and the three THC; genus 1 ->
 //!    the three THC; genus >= 2 -> the box cannot hold the input).
 //! 3. Local stage: each subregion's feasible labels are ranked by their fit in the
 //!    box (the input against the box's assembly with that label in the cell and
@@ -158,8 +158,8 @@ pub struct AutoReport {
     pub chosen_box: Option<[usize; 3]>,
 }
 
-/// The labels a subregion can take: null when empty; by its genus (0: cube and the
-/// six BHC; 1: the three THC) otherwise, with null too when it is filled less than
+/// The labels a subregion can take: null when empty; by its genus (0: cube, the
+/// six BHC and the three THC; 1: the three THC) otherwise, with null too when it is filled less than
 /// `null_fill`; a genus of 2 or more refuses the box unless the subregion is that
 /// thin.
 fn feasible(sub: &Subregion, null_fill: f64) -> std::result::Result<Vec<Primitive>, String> {
@@ -168,7 +168,11 @@ fn feasible(sub: &Subregion, null_fill: f64) -> std::result::Result<Vec<Primitiv
     }
     let thin = sub.fill < null_fill;
     let mut v: Vec<Primitive> = match sub.genus {
-        0 => Primitive::solids().filter(|p| p.family() != Family::Thc).collect(),
+        // a through hole whose far end a neighbouring cell closes is a blind hole
+        // in the subregion (measured genus 0): the through holes stay feasible, and
+        // the assembly's genus decides (complex 0 of BENCHMARKS.md "In-context label
+        // ranking": its THC+Z cell under a solid neighbour measured genus 0)
+        0 => Primitive::solids().collect(),
         1 => Primitive::solids().filter(|p| p.family() == Family::Thc).collect(),
         _ if thin => Vec::new(),
         g => return Err(format!("subregion of cell {} has genus {g}; one cell holds at most one hole", sub.cell)),
