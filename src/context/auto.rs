@@ -468,6 +468,9 @@ pub fn generate_auto(
         for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
             probe.extend(precheck(&input, ctx, &without_fit_limit(&o_global))?);
         }
+        // the pre-check verdicts, reused by the global stage for the contexts the
+        // local filter keeps (the fit limit is applied again to the final set)
+        let prechecked = probe.clone();
         limit_fit(&mut probe, &o_global, best_overall);
         if !probe.iter().any(|c| c.stage == Stage::Pending) {
             passed_over.extend(probe);
@@ -539,7 +542,12 @@ pub fn generate_auto(
         let mut global: Vec<Candidate> = Vec::new();
         let o = &o_global;
         for (ctx, _) in per_box[cb].iter().take(aopts.max_global.max(1)) {
-            global.extend(precheck(&input, ctx, &without_fit_limit(o))?);
+            let known: Vec<Candidate> = prechecked.iter().filter(|c| c.context.labels == ctx.labels).cloned().collect();
+            if known.is_empty() {
+                global.extend(precheck(&input, ctx, &without_fit_limit(o))?);
+            } else {
+                global.extend(known);
+            }
         }
         limit_fit(&mut global, o, best_overall);
         lay_out(&input, &mut global, o)?;
@@ -621,10 +629,11 @@ fn trim_to_budget(options: &mut [Vec<Primitive>], locals: &mut [LocalResult], bu
             })
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((i, _)) = pick else { break };
-        let k = options[i].iter().filter(|p| **p != Primitive::Null).count();
-        let drop = Primitive::parse(&locals[i].fits[k - 1].0).ok();
-        options[i].retain(|p| Some(*p) != drop);
-        locals[i].kept.retain(|n| Some(n.as_str()) != drop.map(|d| d.name()));
+        // a cell's kept labels are its best-ranked ones, in the order of its fits,
+        // so the worst kept label is the last non-null one
+        let Some(drop) = options[i].iter().rev().find(|p| **p != Primitive::Null).copied() else { break };
+        options[i].retain(|p| *p != drop);
+        locals[i].kept.retain(|n| n != drop.name());
     }
 }
 
