@@ -250,7 +250,7 @@ typedef struct sddpm_polycube_options {
   uint32_t sampler_steps;
   // 0 = frame as aligned, 1 = also its sign flips, 2 = all 24 grid rotations (default 2).
   uint32_t orientations;
-  // TCV threshold tau_CD, squared cell units (default 0.01).
+  // TCV threshold tau_CD, squared cell units (default 0.015).
   double tau_cd;
   // Occupancy pre-check: most surface allowed in empty cells (default 0.03).
   double max_in_empty_fraction;

@@ -58,7 +58,7 @@ impl Default for VerifyOptions {
             cell_tolerance: 0.15,
             min_inside_fraction: 0.9,
             max_null_region_fraction: 0.02,
-            tau_cd: 0.01,
+            tau_cd: 0.015,
             penalty_p: 2.0,
             template_points: 2048,
         }

@@ -68,7 +68,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
         opts.verify.tau_cd = t;
     }
     if a.sweep {
-        let taus = [0.005, 0.01, 0.015, 0.02, 0.03, 0.05, 0.08];
+        let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];
         let ps = [1.0, 2.0];
         let rows = sddpm::diffusion::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps)?;
         println!("| tau_CD | p | true accepted | target nearest (cells) | wrong accepted |");

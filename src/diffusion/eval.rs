@@ -165,6 +165,10 @@ pub struct SweepRow {
 /// cases with their true context and with a wrong genus-consistent one, then count, for
 /// every pair of the grid, how many true contexts TCV accepts and how many wrong ones
 /// it accepts. GOCC failures and pre-check refusals are left out (TCV never sees them).
+/// With `SDDPM_SWEEP_FIDELITY` set, also prints to stderr each candidate's per-cell
+/// PCD between its output and its own laid-out input (grid units, tau 0.01, p 2),
+/// the output-against-input test measured in BENCHMARKS.md ("TCV threshold for the
+/// template-attention model").
 pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<Vec<SweepRow>> {
     let synth = SyntheticOptions::default();
     let tpl = crate::verify::cached_templates(opts.verify.template_points);
@@ -182,14 +186,33 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 .collect(),
         )
     };
+    let fid = |c: &Candidate| -> Vec<f64> {
+        let (Some(out), Some(inp)) = (c.output.as_ref(), c.input.as_ref()) else { return vec![] };
+        let s = inp.frame.scale;
+        c.context.occupied().map(|k| {
+            let a: Vec<[f64; 3]> = crate::verify::active_points(out, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect();
+            let b: Vec<[f64; 3]> = crate::verify::active_points(&inp.tensor, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect();
+            crate::verify::pcd(&a, &b, 0.01, 2.0)
+        }).collect()
+    };
     for (i, (ctx, mesh)) in cases(seed, n, min, max, &synth).into_iter().enumerate() {
         let g = ctx.validity().genus.unwrap();
         let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
+        if std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some() {
+            let f = fid(&r.candidates[0]);
+            eprintln!("FID true {i} {ctx} max {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
+        }
         if let Some(v) = collect(&r.candidates[0]) {
             truth.push(v);
         }
         if let Some(w) = wrong_context(&ctx, i as u64) {
             let r = generate_from_contexts(model, &mesh, g, &[w], opts, &mut NoProgress)?;
+            if std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some() {
+                let f = fid(&r.candidates[0]);
+                let k = w.labels.iter().zip(ctx.labels.iter()).position(|(a, b)| a != b).unwrap();
+                let kk = w.occupied().position(|c| c == k).unwrap();
+                eprintln!("FID wrong {i} {w} max {:.4} changed cell {k}: {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.get(kk).copied().unwrap_or(f64::NAN), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
+            }
             if let Some(v) = collect(&r.candidates[0]) {
                 wrong.push(v);
             }

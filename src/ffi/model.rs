@@ -125,7 +125,7 @@ pub struct SddpmPolycubeOptions {
     pub sampler_steps: u32,
     /// 0 = frame as aligned, 1 = also its sign flips, 2 = all 24 grid rotations (default 2).
     pub orientations: u32,
-    /// TCV threshold tau_CD, squared cell units (default 0.01).
+    /// TCV threshold tau_CD, squared cell units (default 0.015).
     pub tau_cd: f64,
     /// Occupancy pre-check: most surface allowed in empty cells (default 0.03).
     pub max_in_empty_fraction: f64,
