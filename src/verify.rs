@@ -25,7 +25,8 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use serde::{Deserialize, Serialize};
 
 /// Every threshold of the verification, with the defaults measured in BENCHMARKS.md
-/// ("Verification thresholds").
+/// (tau_CD: "TCV threshold for the template-attention model"; the spatial check:
+/// "Verification on held-in synthetic inputs").
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct VerifyOptions {

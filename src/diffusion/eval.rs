@@ -161,6 +161,33 @@ pub struct SweepRow {
     pub wrong_cases: usize,
 }
 
+/// GOCC's measurements on one diffused candidate (the sweep's evidence for
+/// `VerifyOptions::tau_active`, `min_inside_fraction` and `max_null_region_fraction`).
+#[derive(Debug, Clone, Serialize)]
+pub struct GoccSample {
+    /// The true context (else a wrong genus-consistent one).
+    pub truth: bool,
+    pub gocc_pass: bool,
+    /// Smallest bounding-box span of an occupied cell's points (cell units).
+    pub min_span: f64,
+    /// Smallest fraction of an occupied block's points inside its own cell.
+    pub min_inside: f64,
+    /// Fraction of the active points in null cells' regions.
+    pub null_fraction: f64,
+}
+
+fn gocc_sample(c: &Candidate, truth: bool) -> Option<GoccSample> {
+    let r = c.report.as_ref()?;
+    let occ: Vec<&crate::verify::CellReport> = r.cells.iter().filter(|cr| c.context.labels[cr.cell] != Primitive::Null).collect();
+    Some(GoccSample {
+        truth,
+        gocc_pass: r.gocc_pass,
+        min_span: occ.iter().map(|cr| cr.span).fold(f64::INFINITY, f64::min),
+        min_inside: occ.iter().map(|cr| cr.inside_fraction).fold(f64::INFINITY, f64::min),
+        null_fraction: r.null_region_fraction,
+    })
+}
+
 /// The measurement behind `VerifyOptions::tau_cd` and `penalty_p`: diffuse `n` held-in
 /// cases with their true context and with a wrong genus-consistent one, then count, for
 /// every pair of the grid, how many true contexts TCV accepts and how many wrong ones
@@ -168,8 +195,10 @@ pub struct SweepRow {
 /// With `SDDPM_SWEEP_FIDELITY` set, also prints to stderr each candidate's per-cell
 /// PCD between its output and its own laid-out input (grid units, tau 0.01, p 2),
 /// the output-against-input test measured in BENCHMARKS.md ("TCV threshold for the
-/// template-attention model").
-pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<Vec<SweepRow>> {
+/// template-attention model"). Also returns GOCC's measurements on every diffused
+/// candidate, true and wrong.
+pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<(Vec<SweepRow>, Vec<GoccSample>)> {
+    let mut gocc: Vec<GoccSample> = Vec::new();
     let synth = SyntheticOptions::default();
     let tpl = crate::verify::cached_templates(opts.verify.template_points);
     let mut truth: Vec<Vec<SweepCell>> = Vec::new();
@@ -202,6 +231,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
             let f = fid(&r.candidates[0]);
             eprintln!("FID true {i} {ctx} max {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
         }
+        gocc.extend(gocc_sample(&r.candidates[0], true));
         if let Some(v) = collect(&r.candidates[0]) {
             truth.push(v);
         }
@@ -213,6 +243,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 let kk = w.occupied().position(|c| c == k).unwrap();
                 eprintln!("FID wrong {i} {w} max {:.4} changed cell {k}: {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.get(kk).copied().unwrap_or(f64::NAN), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
             }
+            gocc.extend(gocc_sample(&r.candidates[0], false));
             if let Some(v) = collect(&r.candidates[0]) {
                 wrong.push(v);
             }
@@ -245,5 +276,5 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
             rows.push(row);
         }
     }
-    Ok(rows)
+    Ok((rows, gocc))
 }

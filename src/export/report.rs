@@ -104,6 +104,9 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
             "source": r.polycube.source,
             "candidates": r.polycube.candidates.len(),
             "verified": r.polycube.verified().count(),
+            // candidates that went through the diffusion (the others were refused
+            // by the pre-check or the fit limit)
+            "diffused": r.polycube.candidates.iter().filter(|c| c.report.is_some()).count(),
             "genus": cand.context.validity().genus,
             "rotation": cand.rotation,
             "fit": cand.fit,
