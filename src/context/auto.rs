@@ -388,9 +388,12 @@ pub fn generate_auto(
     check_progress(progress, 0.3, "global candidates")?;
     let mut joint_found: Vec<std::collections::HashSet<[Primitive; NUM_CELLS]>> = vec![Default::default(); per_box.len()];
     for (bi, cands) in per_box.iter_mut().enumerate() {
-        for (ctx, f) in cands.iter_mut() {
-            *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES));
-        }
+        // Thousands of candidates for a genus-0 part (a box: 22,000 over the 12
+        // boxes): the fits are independent, so they run on every core. (Ranking them
+        // on a coarse fit first was tried and lost a complex part's true solid:
+        // BENCHMARKS.md "Global fits in parallel".)
+        use rayon::prelude::*;
+        cands.par_iter_mut().for_each(|(ctx, f)| *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES)));
         if aopts.joint_labels {
             if let Some((cells, lists)) = &joint_lists[bi] {
                 let found = joint_labels(fit_sub, cells, lists, input_genus, JOINT_SWEEPS);
