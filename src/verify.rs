@@ -25,8 +25,8 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use serde::{Deserialize, Serialize};
 
 /// Every threshold of the verification, with the defaults measured in BENCHMARKS.md
-/// (tau_CD: "TCV threshold for the template-attention model"; the spatial check:
-/// "Verification on held-in synthetic inputs").
+/// ("TCV threshold for the template-attention model": tau_CD and p from a sweep of
+/// true against wrong contexts, GOCC's span and placement margins from the same run).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct VerifyOptions {

@@ -80,7 +80,7 @@ fn run_writes_the_whole_run_folder() {
     for k in ["labels", "source", "candidates", "verified", "diffused", "genus"] {
         assert!(!v["polycube"][k].is_null(), "polycube.{k}");
     }
-    // verified candidates went through the diffusion, which only candidates go through
+    // verified <= diffused <= candidates: only diffused candidates can be verified
     let count = |k: &str| v["polycube"][k].as_u64().unwrap();
     assert!(count("verified") <= count("diffused") && count("diffused") <= count("candidates"), "{}", v["polycube"]);
     for k in ["vertices", "elements", "min_scaled_jacobian", "mean_scaled_jacobian", "inverted", "hausdorff_relative", "file"] {
