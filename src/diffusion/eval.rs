@@ -215,21 +215,30 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 .collect(),
         )
     };
-    let fid = |c: &Candidate| -> Vec<f64> {
-        let (Some(out), Some(inp)) = (c.output.as_ref(), c.input.as_ref()) else { return vec![] };
-        let s = inp.frame.scale;
-        c.context.occupied().map(|k| {
-            let a: Vec<[f64; 3]> = crate::verify::active_points(out, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect();
-            let b: Vec<[f64; 3]> = crate::verify::active_points(&inp.tensor, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect();
-            crate::verify::pcd(&a, &b, 0.01, 2.0)
-        }).collect()
+    // SDDPM_SWEEP_FIDELITY: each occupied cell's PCD between the output and its own
+    // laid-out input, printed as "max [per cell] stage" after `head` (and, for a
+    // wrong context, the value of its relabelled cell)
+    let show_fidelity = std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some();
+    let print_fidelity = |head: String, c: &Candidate, changed: Option<usize>| {
+        let cells: Vec<usize> = c.context.occupied().collect();
+        // no values for a candidate the pre-check refused (it has no output)
+        let f: Vec<f64> = match (c.output.as_ref(), c.input.as_ref()) {
+            (Some(out), Some(inp)) => {
+                let s = inp.frame.scale;
+                let scaled = |t: &[f32], k: usize| -> Vec<[f64; 3]> { crate::verify::active_points(t, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect() };
+                cells.iter().map(|&k| crate::verify::pcd(&scaled(out, k), &scaled(&inp.tensor, k), 0.01, 2.0)).collect()
+            }
+            _ => Vec::new(),
+        };
+        let max = f.iter().cloned().fold(0.0, f64::max);
+        let at = changed.map(|k| format!(" changed cell {k}: {:.4}", cells.iter().position(|&c| c == k).and_then(|j| f.get(j).copied()).unwrap_or(f64::NAN))).unwrap_or_default();
+        eprintln!("{head} max {max:.4}{at} {:?} stage {:?}", f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), c.stage);
     };
     for (i, (ctx, mesh)) in cases(seed, n, min, max, &synth).into_iter().enumerate() {
         let g = ctx.validity().genus.unwrap();
         let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
-        if std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some() {
-            let f = fid(&r.candidates[0]);
-            eprintln!("FID true {i} {ctx} max {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
+        if show_fidelity {
+            print_fidelity(format!("FID true {i} {ctx}"), &r.candidates[0], None);
         }
         gocc.extend(gocc_sample(&r.candidates[0], true));
         if let Some(v) = collect(&r.candidates[0]) {
@@ -237,11 +246,9 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
         }
         if let Some(w) = wrong_context(&ctx, i as u64) {
             let r = generate_from_contexts(model, &mesh, g, &[w], opts, &mut NoProgress)?;
-            if std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some() {
-                let f = fid(&r.candidates[0]);
-                let k = w.labels.iter().zip(ctx.labels.iter()).position(|(a, b)| a != b).unwrap();
-                let kk = w.occupied().position(|c| c == k).unwrap();
-                eprintln!("FID wrong {i} {w} max {:.4} changed cell {k}: {:.4} {:?} stage {:?}", f.iter().cloned().fold(0.0, f64::max), f.get(kk).copied().unwrap_or(f64::NAN), f.iter().map(|x| (x * 1e4).round() / 1e4).collect::<Vec<_>>(), r.candidates[0].stage);
+            if show_fidelity {
+                let k = w.labels.iter().zip(ctx.labels.iter()).position(|(a, b)| a != b);
+                print_fidelity(format!("FID wrong {i} {w}"), &r.candidates[0], k);
             }
             gocc.extend(gocc_sample(&r.candidates[0], false));
             if let Some(v) = collect(&r.candidates[0]) {
