@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job on every test mesh (automated mode, default options, embedded model):
 #   sddpm run MESH -o OUT/NAME -q
-# then one markdown row per mesh from its report.json (BENCHMARKS.md "Main job").
+# then one markdown row per mesh from its report.json (BENCHMARKS.md "Main job"),
+# and a second table of the spline stage (Gauss-point Jacobians, fit to the surface).
 # Usage: bash benches/run_main_job.sh [OUT]   (default build/runs). Prints the table.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -43,4 +44,20 @@ for n in sorted(status):
     meshed = len(h.get("candidates_meshed") or [])
     bad = sp.get("negative_jacobian_elements", "")
     print(f"| {n} | {tris} | {g} | {labels} | {'yes' if pc['verified_choice'] else 'no'} | {pc['verified']}/{pc['candidates']} | {meshed} | {h['level']} | {h['elements']} | {h['min_scaled_jacobian']:.3f} | {h['mean_scaled_jacobian']:.3f} | {h['inverted']} | {100*h['hausdorff_relative']:.2f} % | {bad} | {s:.0f} |")
+print()
+print("| mesh | spline elements | basis | extraordinary edges | sharp edges | repaired | min det J | min scaled J (Gauss) | mean scaled J | det J <= 0 | boundary Hausdorff before fit | after fit | spline s |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for n in sorted(status):
+    p = os.path.join(out, n, "report.json")
+    if status[n][0] != 0 or not os.path.exists(p):
+        continue
+    sp = json.load(open(p)).get("spline") or {}
+    if not sp:
+        print(f"| {n} | no spline | | | | | | | | | | | |")
+        continue
+    def haus(k):
+        d = sp.get(k)
+        return f"{100*d['hausdorff_relative']:.2f} %" if d else ""
+    secs = sum(v for v in (sp.get("seconds") or {}).values() if isinstance(v, (int, float)))
+    print(f"| {n} | {sp['elements']} | {sp['basis_functions']} | {sp['extraordinary_edges']} | {sp['sharp_edges']} | {sp['repaired_elements']} | {sp['min_jacobian']:.3e} | {sp['min_scaled_jacobian']:.3f} | {sp['mean_scaled_jacobian']:.3f} | {sp['negative_jacobian_elements']} | {haus('fitting_before')} | {haus('fitting_after')} | {secs:.1f} |")
 PY

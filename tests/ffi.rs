@@ -238,3 +238,43 @@ fn hex_and_spline_handles_contract() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The slow unit the fuzzer found in `ffi_inputs` (docs/fuzzing.md): a constraint set
+/// over five allowed cells with free counts, decoded exactly as the fuzz target decodes
+/// its selector-4 inputs. Before `context::MAX_ASSIGNMENTS` it enumerated for 24 s
+/// under ASan; now it gives contexts or refuses with INVALID_ARGUMENT and a message
+/// that says how to narrow the constraints.
+#[test]
+fn fuzz_regression_slow_constraints_end_with_a_status() {
+    let data = std::fs::read(format!("{}/tests/data/fuzz/ffi_inputs-slow-constraints.bin", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let (&sel, rest) = data.split_first().unwrap();
+    assert_eq!(sel % 6, 4, "the unit is a constraint set");
+    unsafe {
+        let mut k = std::mem::zeroed::<SddpmConstraints>();
+        assert_eq!(sddpm_constraints_default(&mut k), Status::Ok);
+        k.cube = (rest[0] % 14) as i32 - 1;
+        k.thc = (rest[1] % 14) as i32 - 1;
+        k.bhc = (rest[2] % 14) as i32 - 1;
+        k.allowed_mask = u16::from_le_bytes([rest[3], rest[4]]);
+        k.required_mask = u16::from_le_bytes([rest[5], rest[6]]) & k.allowed_mask;
+        k.genus = (rest[7] % 6) as i64 - 1;
+        for i in 0..11 {
+            k.per_label[i] = if rest[8 + i] % 3 == 0 { (rest[8 + i] % 5) as i32 } else { -1 };
+        }
+        let mut c = null_mut();
+        match sddpm_context_new_from_constraints(&k, &mut c) {
+            Status::Ok => {
+                let mut n = 0usize;
+                assert_eq!(sddpm_context_count(c, &mut n), Status::Ok);
+                assert!(n > 0);
+                sddpm_context_free(c);
+            }
+            Status::InvalidArgument => {
+                assert!(c.is_null());
+                let m = last_message();
+                assert!(m.contains("label assignments") || m.contains("constraint"), "{m}");
+            }
+            s => panic!("unexpected status {s:?}: {}", last_message()),
+        }
+    }
+}

@@ -65,6 +65,16 @@ pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &st
 }
 
 /// Axis label: at most 3 significant digits, scientific notation for small or large values.
+/// A tick value that is zero up to rounding (the axis span times 1e-9) is zero, so a
+/// tick at 0 does not read -5.55e-17.
+fn snap(v: f64, span: f64) -> f64 {
+    if v.abs() <= 1e-9 * span.abs() {
+        0.0
+    } else {
+        v
+    }
+}
+
 fn short(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 {
@@ -119,8 +129,8 @@ pub fn line_png(path: &Path, series: &[Series], title: &str, xlabel: &str, ylabe
                 .configure_mesh()
                 .x_desc(xlabel)
                 .y_desc(ylabel)
-                .y_label_formatter(&|v: &f64| short(*v))
-                .x_label_formatter(&|v: &f64| short(*v))
+                .y_label_formatter(&|v: &f64| short(snap(*v, y1 - y0)))
+                .x_label_formatter(&|v: &f64| short(snap(*v, x1 - x0)))
                 .label_style(("sans-serif", 15))
                 .axis_desc_style(("sans-serif", 17))
                 .draw()
