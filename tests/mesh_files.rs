@@ -248,3 +248,39 @@ fn unreadable_files_are_io_or_parse_errors() {
     assert_eq!(e.status(), Status::InvalidMesh);
     assert!(e.to_string().contains("non-finite") && e.to_string().contains("vertex 1"), "{e}");
 }
+
+/// A binary STL announcing 10^7 triangles (a sparse file of the size the count
+/// implies, 500 MB that take no disk) is refused with LIMIT_EXCEEDED from its
+/// 84-byte header, before the rest of the file is read; an OFF file whose header
+/// announces more faces than the limit, and that is large enough to hold them, is
+/// refused before its faces are parsed.
+#[test]
+fn oversized_inputs_are_refused_from_their_headers() {
+    let n: u64 = 10_000_000;
+    let p = tmp("ten_million.stl", &[]);
+    {
+        use std::io::Write;
+        let mut f = std::fs::File::create(&p).unwrap();
+        let mut head = vec![b' '; 80];
+        head.extend_from_slice(&(n as u32).to_le_bytes());
+        f.write_all(&head).unwrap();
+        f.set_len(84 + 50 * n).unwrap();
+    }
+    let e = TriMesh::load(&p, &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.status(), sddpm::Status::LimitExceeded, "{e}");
+    assert!(e.to_string().contains("10000000 triangles"), "{e}");
+    std::fs::remove_file(&p).unwrap();
+
+    // the same header from bytes held in memory (the C ABI's and the fuzzers' path)
+    let mut bytes = vec![b' '; 80];
+    bytes.extend_from_slice(&(sddpm::mesh::MAX_TRIANGLES as u32 + 1).to_le_bytes());
+    bytes.resize(84 + 50 * (sddpm::mesh::MAX_TRIANGLES + 1), 0);
+    let e = TriMesh::from_bytes(&bytes, None, "big.stl", &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.status(), sddpm::Status::LimitExceeded, "{e}");
+
+    let faces = sddpm::mesh::MAX_TRIANGLES + 1;
+    let mut off = format!("OFF\n3 {faces} 0\n0 0 0\n1 0 0\n0 1 0\n");
+    off.push_str(&" ".repeat(2 * faces));
+    let e = TriMesh::from_bytes(off.as_bytes(), None, "big.off", &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.status(), sddpm::Status::LimitExceeded, "{e}");
+}

@@ -50,7 +50,7 @@ pub struct BatchArgs {
 
 fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions) -> Result<Value> {
     let t0 = std::time::Instant::now();
-    let Loaded { mesh, report, path } = load_checked(file)?;
+    let Loaded { mesh, report, path } = load_checked(file, sddpm::mesh::DEFAULT_WELD_TOLERANCE)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let r = run_job(model, &mesh, genus, &ContextRequest::Auto, opts, &mut NoProgress)?;
     write_run_folder(out, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())

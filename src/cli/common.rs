@@ -12,9 +12,10 @@ pub struct Loaded {
     pub path: String,
 }
 
-/// Load with the default options and refuse a mesh that cannot go on to meshing.
-pub fn load_checked(path: &Path) -> Result<Loaded> {
-    let mesh = TriMesh::load(path, &LoadOptions::default())?;
+/// Load with the default options but `weld_tolerance` and refuse a mesh that cannot
+/// go on to meshing.
+pub fn load_checked(path: &Path, weld_tolerance: f64) -> Result<Loaded> {
+    let mesh = TriMesh::load(path, &LoadOptions { weld_tolerance, ..LoadOptions::default() })?;
     let report = mesh.validate().map_err(|e| match e {
         Error::InvalidMesh(m) => Error::InvalidMesh(format!("{}: {m}", path.display())),
         o => o,

@@ -18,6 +18,10 @@ pub struct PolycubeArgs {
     /// Output folder.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
+    /// Weld tolerance relative to the bounding-box diagonal (negative: no welding;
+    /// lower it for parts thinner than 1e-9 of their size).
+    #[arg(long, default_value_t = sddpm::mesh::DEFAULT_WELD_TOLERANCE, allow_negative_numbers = true)]
+    pub weld_tolerance: f64,
     /// A complete context: 12 labels in cell-index order (repeat for a stack).
     #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["constraints", "auto"])]
     pub labels: Vec<String>,
@@ -104,7 +108,7 @@ pub fn load_model(weights: &Option<PathBuf>) -> Result<Model> {
 
 pub fn run(a: &PolycubeArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
-    let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh)?;
+    let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh, a.weld_tolerance)?;
     let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(a)?;
     let model = load_model(&a.weights)?;

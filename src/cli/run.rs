@@ -29,7 +29,7 @@ pub struct RunArgs {
 pub fn run(a: &RunArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
-    let Loaded { mesh, report, path } = load_checked(&p.mesh)?;
+    let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
     let model = load_model(&p.weights)?;

@@ -77,6 +77,18 @@ pub(crate) fn read_file(path: &Path) -> Result<(Vec<u8>, Format)> {
             super::MAX_TRIANGLES
         )));
     }
+    // A binary STL says how many triangles it holds in its first 84 bytes: one over
+    // the limit is refused before the rest of the file is read.
+    if len >= 84 {
+        use std::io::Read;
+        let mut head = [0u8; 84];
+        let mut f = std::fs::File::open(path).map_err(|e| Error::io(&shown, e))?;
+        f.read_exact(&mut head).map_err(|e| Error::io(&shown, e))?;
+        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+        if 84 + 50 * n == len {
+            super::check_triangle_limit(n as usize, &shown.to_string())?;
+        }
+    }
     let bytes = std::fs::read(path).map_err(|e| Error::io(&shown, e))?;
     let format = Format::from_extension(path)
         .or_else(|| Format::sniff(&bytes))
@@ -166,6 +178,9 @@ fn parse_stl(bytes: &[u8], shown: &str) -> Result<Soup> {
 }
 
 fn parse_stl_binary(bytes: &[u8], shown: &str) -> Result<Soup> {
+    if bytes.len() >= 84 {
+        super::check_triangle_limit(u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize, shown)?;
+    }
     // stl_io decides ASCII vs binary from a leading "solid "; our caller already
     // decided (by the size formula), so hand it a copy whose header cannot look ASCII.
     let mut data = bytes.to_vec();
@@ -288,6 +303,8 @@ fn parse_off(bytes: &[u8], shown: &str) -> Result<Soup> {
     if nv > max_items || nf > max_items {
         return Err(Error::parse(shown, format!("line {cline}: counts {nv} vertices / {nf} faces exceed what the file can hold")));
     }
+    // every face is at least one triangle: a header over the limit is refused before parsing
+    super::check_triangle_limit(nf, shown)?;
     let mut soup = Soup { vertices: Vec::with_capacity(nv), ..Default::default() };
     for k in 0..nv {
         let (n, l) = lines
