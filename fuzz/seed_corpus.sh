@@ -20,4 +20,10 @@ fi
 head -c 4096 ../models/default.sddpmw > corpus/weights/header_only
 printf '\x01\x01\x00\x00\x00\x02\x00\x00\x00\x00\x00\x00\x00' > corpus/ffi_inputs/labels
 printf '\x03cube,THC+Z,0,0,0,0,0,0,0,0,0,0' > corpus/ffi_inputs/string
+# the C ABI cases added 2026-12-03: load options (6), weights bytes (7),
+# polycube options and ratios (8), spline options and evaluation (9)
+printf '\x06\x00\x00\x00\x00\x00\x00\x00\x00\x01\x10' > corpus/ffi_inputs/load_options
+{ printf '\x07'; head -c 4096 ../models/default.sddpmw; } > corpus/ffi_inputs/weights_header
+{ printf '\x08\x00\x19\x00\x00\x00\x02\x01\x00'; head -c 120 /dev/zero; } > corpus/ffi_inputs/polycube_options
+{ printf '\x09'; head -c 64 /dev/zero; } > corpus/ffi_inputs/spline_eval
 echo "corpora: $(ls corpus/* | wc -l) files"
