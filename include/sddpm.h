@@ -99,7 +99,9 @@ typedef enum sddpm_hex_format {
   SDDPM_HEX_FORMAT_LSDYNA = 3,
 } sddpm_hex_format;
 
-// An opaque stack of contexts (release with sddpm_context_free).
+// An opaque stack of contexts (release with sddpm_context_free). Immutable once
+// created: calls that take it may come from several threads at once; freeing it
+// while another thread uses it is not allowed.
 typedef struct sddpm_context sddpm_context;
 
 // An opaque all-hex mesh with its quality; not thread-safe to free while in use,
@@ -107,14 +109,18 @@ typedef struct sddpm_context sddpm_context;
 typedef struct sddpm_hex_mesh sddpm_hex_mesh;
 
 // An opaque mesh handle (create with sddpm_mesh_load or
-// sddpm_mesh_new_from_arrays, release with sddpm_mesh_free).
+// sddpm_mesh_new_from_arrays, release with sddpm_mesh_free). Immutable once
+// created: calls that take it (several pipelines on one mesh included) may come
+// from several threads at once; freeing it while another thread uses it is not allowed.
 typedef struct sddpm_mesh sddpm_mesh;
 
 // An opaque diffusion model (immutable once loaded: one handle may be used by
 // several threads at once).
 typedef struct sddpm_model sddpm_model;
 
-// The result of polycube generation (release with sddpm_polycube_free).
+// The result of polycube generation (release with sddpm_polycube_free). Immutable
+// once created: read calls and sddpm_hex_mesh_build may come from several threads
+// at once; freeing it while another thread uses it is not allowed.
 typedef struct sddpm_polycube sddpm_polycube;
 
 // An opaque volumetric spline (read-only calls may come from several threads).

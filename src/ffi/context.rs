@@ -7,7 +7,9 @@ use crate::error::{Error, Result, Status};
 use crate::polycube::{Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
 use std::ffi::{c_char, CStr};
 
-/// An opaque stack of contexts (release with sddpm_context_free).
+/// An opaque stack of contexts (release with sddpm_context_free). Immutable once
+/// created: calls that take it may come from several threads at once; freeing it
+/// while another thread uses it is not allowed.
 pub struct SddpmContext {
     pub(crate) contexts: Vec<Context>,
 }

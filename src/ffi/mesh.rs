@@ -7,7 +7,9 @@ use std::ffi::{c_char, CStr};
 use std::sync::OnceLock;
 
 /// An opaque mesh handle (create with sddpm_mesh_load or
-/// sddpm_mesh_new_from_arrays, release with sddpm_mesh_free).
+/// sddpm_mesh_new_from_arrays, release with sddpm_mesh_free). Immutable once
+/// created: calls that take it (several pipelines on one mesh included) may come
+/// from several threads at once; freeing it while another thread uses it is not allowed.
 pub struct SddpmMesh {
     mesh: TriMesh,
     report: OnceLock<MeshReport>,

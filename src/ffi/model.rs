@@ -181,7 +181,9 @@ fn options(o: Option<&SddpmPolycubeOptions>) -> Result<(PolycubeOptions, AutoOpt
     Ok((p, a))
 }
 
-/// The result of polycube generation (release with sddpm_polycube_free).
+/// The result of polycube generation (release with sddpm_polycube_free). Immutable
+/// once created: read calls and sddpm_hex_mesh_build may come from several threads
+/// at once; freeing it while another thread uses it is not allowed.
 pub struct SddpmPolycube {
     pub(crate) result: PolycubeResult,
     pub(crate) auto: Option<AutoReport>,
