@@ -112,3 +112,44 @@ fn cancel_at_every_stage() {
         assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return (total {:?})", t0.elapsed());
     }
 }
+
+/// The automated mode's own stages (temporary volume, subregions, local and global
+/// diffusion, ...) can be cancelled too: cancelling at each stage it reports returns
+/// CANCELLED within that stage.
+#[test]
+fn cancel_at_every_stage_of_the_automated_mode() {
+    use sddpm::context::auto::AutoOptions;
+    use sddpm::context::generate::PolycubeOptions;
+    use sddpm::pipeline::generate_polycube;
+    let model = Model::default_model().unwrap();
+    let hole = input("cgal_hole.off");
+    let (popts, aopts) = (PolycubeOptions::default(), AutoOptions::default());
+    let mut stages: Vec<String> = Vec::new();
+    let mut record = |_f: f64, s: &str| {
+        if !stages.iter().any(|x| x == s) {
+            stages.push(s.to_string());
+        }
+        true
+    };
+    generate_polycube(&model, &hole, 1, &ContextRequest::Auto, &popts, &aopts, &mut record).unwrap();
+    for want in ["temporary volume", "subregions"] {
+        assert!(stages.iter().any(|s| s.contains(want)), "no {want:?} stage in {stages:?}");
+    }
+    for stage in &stages {
+        let mut at: Option<std::time::Instant> = None;
+        let mut cancel = |_f: f64, s: &str| {
+            if s == stage {
+                at.get_or_insert_with(std::time::Instant::now);
+                false
+            } else {
+                true
+            }
+        };
+        match generate_polycube(&model, &hole, 1, &ContextRequest::Auto, &popts, &aopts, &mut cancel) {
+            Err(e) => assert_eq!(e.status(), sddpm::error::Status::Cancelled, "stage {stage}: {e}"),
+            Ok(_) => panic!("stage {stage}: not cancelled"),
+        }
+        let after = at.expect("the stage was reached").elapsed();
+        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
+    }
+}
