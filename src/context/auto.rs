@@ -250,6 +250,24 @@ pub fn generate_auto(
     check_progress(progress, 0.02, "temporary volume")?;
     let surface_volume = input.alignment.mesh.check().volume.abs();
     let (vol, resolution) = temporary_volume(&input.alignment.mesh, aopts.resolution, surface_volume)?;
+    let ratio = vol.volume() / surface_volume.max(f64::MIN_POSITIVE);
+    if !(THIN_PART_FRACTION..=1.0 / THIN_PART_FRACTION).contains(&ratio) {
+        // The finest lattice still misses most of the solid, or a wall thinner than
+        // a voxel fills whole voxels: the subregions' fills and genera would
+        // describe the lattice, not the part. Say why instead.
+        let bb = crate::geometry::Aabb::of_points(&input.alignment.mesh.vertices);
+        let e = bb.size();
+        let (thin, long) = (e.iter().copied().fold(f64::INFINITY, f64::min), e.iter().copied().fold(0.0, f64::max));
+        return Err(Error::VerificationFailed(format!(
+            "automated mode: the temporary volume at {resolution} voxels along the longest side holds {:.3e} of the surface's volume {:.3e} ({:.1} %): the part is thinner than a voxel (thinnest bounding-box extent {:.3e}, {:.1e} of the longest {:.3e}), so its subregions cannot be measured; give a context (--labels) or constraints instead",
+            vol.volume(),
+            surface_volume,
+            100.0 * vol.volume() / surface_volume.max(f64::MIN_POSITIVE),
+            thin,
+            thin / long.max(f64::MIN_POSITIVE),
+            long
+        )));
+    }
     let mut report = AutoReport {
         resolution,
         volume_tetrahedra: vol.tetrahedra(),
@@ -717,6 +735,11 @@ pub fn box_scale(size: [f64; 3], dims: [usize; 3]) -> [f64; 3] {
 /// its resolution is doubled (the test meshes are within 5 % at 48 voxels; a thin
 /// wall, like the 12:1 tube of trimesh_round at 48, holds no voxel centre at all).
 pub const VOLUME_TOLERANCE: f64 = 0.1;
+/// A temporary volume holding less than this fraction of the surface's volume, or
+/// more than its inverse, at the finest resolution allowed means walls thinner
+/// than a voxel: the automated mode refuses with the reason instead of measuring
+/// subregions of a lattice that does not describe the part.
+pub const THIN_PART_FRACTION: f64 = 0.5;
 /// The doubling stops at this many voxels along the longest side ...
 pub const MAX_RESOLUTION: usize = 384;
 /// ... or at this many voxels in the bounding grid.
@@ -836,6 +859,17 @@ mod tests {
         // a cube is within the tolerance at once: no refinement
         let c = box_mesh(1.0, 1.0, 1.0);
         assert_eq!(temporary_volume(&c, 48, 1.0).unwrap().1, 48);
+    }
+
+    #[test]
+    fn a_part_thinner_than_a_voxel_is_refused_with_the_reason() {
+        // 1 x 1 x 1e-4: thinner than a voxel even at MAX_RESOLUTION (1/384)
+        let m = box_mesh(1.0, 1.0, 1e-4);
+        let model = crate::diffusion::Model::default_model().unwrap();
+        let e = generate_auto(&model, &m, 0, None, &PolycubeOptions::default(), &AutoOptions::default(), &mut crate::error::NoProgress).unwrap_err();
+        assert_eq!(e.status(), crate::error::Status::VerificationFailed);
+        let msg = e.to_string();
+        assert!(msg.contains("thinner than a voxel") && msg.contains("--labels"), "{msg}");
     }
 
     #[test]
