@@ -121,7 +121,40 @@ pub fn line_png(path: &Path, series: &[Series], title: &str, xlabel: &str, ylabe
     }
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-    let palette = [RGBColor(60, 110, 180), RGBColor(220, 110, 40), RGBColor(60, 160, 80), RGBColor(170, 60, 160), RGBColor(120, 120, 120)];
+    let palette = [
+        RGBColor(60, 110, 180),
+        RGBColor(220, 110, 40),
+        RGBColor(60, 160, 80),
+        RGBColor(170, 60, 160),
+        RGBColor(120, 120, 120),
+        RGBColor(200, 50, 50),
+        RGBColor(40, 170, 170),
+        RGBColor(150, 120, 30),
+    ];
+    // the legend goes to the corner whose quarter of the plot holds the fewest points
+    let legend_at = {
+        let (ym0, ym1) = if log_y { (y0.ln(), (y1 * 1.05).ln()) } else { (y0, y1) };
+        let yv = |y: f64| if log_y { y.ln() } else { y };
+        let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+        for (pos, right, upper) in [
+            (SeriesLabelPosition::UpperRight, true, true),
+            (SeriesLabelPosition::UpperLeft, false, true),
+            (SeriesLabelPosition::LowerRight, true, false),
+            (SeriesLabelPosition::LowerLeft, false, false),
+        ] {
+            let n = pts()
+                .filter(|p| {
+                    let fx = (p.0 - x0) / (x1 - x0);
+                    let fy = (yv(p.1) - ym0) / (ym1 - ym0);
+                    (if right { fx > 0.6 } else { fx < 0.4 }) && (if upper { fy > 0.55 } else { fy < 0.45 })
+                })
+                .count();
+            if n < best.0 {
+                best = (n, pos);
+            }
+        }
+        best.1
+    };
     macro_rules! draw {
         ($chart:expr) => {{
             let mut chart = $chart;
@@ -147,6 +180,7 @@ pub fn line_png(path: &Path, series: &[Series], title: &str, xlabel: &str, ylabe
             if series.len() > 1 {
                 chart
                     .configure_series_labels()
+                    .position(legend_at.clone())
                     .label_font(("sans-serif", 15))
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
