@@ -153,3 +153,38 @@ fn cancel_at_every_stage_of_the_automated_mode() {
         assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
     }
 }
+
+/// The grid-based fallback's stages (voxel lattice, mapping, quality improvement)
+/// can be cancelled too.
+#[test]
+fn cancel_at_every_stage_of_the_voxel_fallback() {
+    use sddpm::hex::{build_voxel_hex_mesh, Affine, HexOptions};
+    let torus = input("cinolib_torus.obj");
+    let frame = Affine::similarity(1.0, [0.0; 3]);
+    let mut stages: Vec<String> = Vec::new();
+    let mut record = |_f: f64, s: &str| {
+        if !stages.iter().any(|x| x == s) {
+            stages.push(s.to_string());
+        }
+        true
+    };
+    build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), &mut record).unwrap();
+    assert!(stages.len() >= 3 && stages.iter().any(|s| s.contains("voxel")), "{stages:?}");
+    for stage in &stages {
+        let mut at: Option<std::time::Instant> = None;
+        let mut cancel = |_f: f64, s: &str| {
+            if s == stage {
+                at.get_or_insert_with(std::time::Instant::now);
+                false
+            } else {
+                true
+            }
+        };
+        match build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), &mut cancel) {
+            Err(e) => assert_eq!(e.status(), sddpm::error::Status::Cancelled, "stage {stage}: {e}"),
+            Ok(_) => panic!("stage {stage}: not cancelled"),
+        }
+        let after = at.expect("the stage was reached").elapsed();
+        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
+    }
+}
