@@ -194,8 +194,19 @@ pub(crate) fn signed_volume_of(mesh: &TriMesh, t: usize) -> f64 {
     dot(a, cross(b, c)) / 6.0
 }
 
-fn fmt_p(p: [f64; 3]) -> String {
-    format!("({}, {}, {})", p[0], p[1], p[2])
+/// A coordinate as messages show it: shortest round-trip decimal, in exponent form
+/// when it is tiny or huge (so 2.3e-41 is not forty zeros).
+fn fmt_c(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-5..1e15).contains(&a) || !a.is_finite() {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+pub(crate) fn fmt_p(p: [f64; 3]) -> String {
+    format!("({}, {}, {})", fmt_c(p[0]), fmt_c(p[1]), fmt_c(p[2]))
 }
 
 pub(crate) fn check(mesh: &TriMesh) -> MeshReport {

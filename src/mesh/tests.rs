@@ -324,3 +324,9 @@ fn report_serialises_to_json() {
     assert_eq!(v["closed"], true);
     assert!(v["issues"].as_array().unwrap().is_empty());
 }
+
+#[test]
+fn message_coordinates_are_short() {
+    assert_eq!(check::fmt_p([0.5, -1.0, 0.0]), "(0.5, -1, 0)");
+    assert_eq!(check::fmt_p([2.2779507836064226e-41, 1e307, -1.55991e-8]), "(2.2779507836064226e-41, 1e307, -1.55991e-8)");
+}
