@@ -75,25 +75,19 @@ fn same_seed_same_bits_and_threads_agree() {
     }
 }
 
-/// Cancelling from the progress callback at any stage of the whole job returns
-/// CANCELLED promptly (within the stage), for every stage the job reports.
-#[test]
-fn cancel_at_every_stage() {
-    let model = Model::default_model().unwrap();
-    let hole = input("cgal_hole.off");
-    let req = ContextRequest::Contexts(vec![Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()]);
+/// Runs `job` once recording the stages it reports, then once per stage cancelling
+/// at that stage's first report: every run must end with CANCELLED within 5 s of
+/// the request. Returns the stages.
+fn assert_cancels_at_every_stage(mut job: impl FnMut(&mut dyn sddpm::error::Progress) -> sddpm::Result<()>) -> Vec<String> {
     let mut stages: Vec<String> = Vec::new();
     let mut record = |_f: f64, s: &str| {
-        if stages.last().map(|l| l != s).unwrap_or(true) && !stages.iter().any(|x| x == s) {
+        if !stages.iter().any(|x| x == s) {
             stages.push(s.to_string());
         }
         true
     };
-    run(&model, &hole, 1, &req, &options(1), &mut record).unwrap();
-    assert!(stages.len() >= 5, "{stages:?}");
-    assert!(stages.iter().any(|s| s.contains("diffusion")) && stages.iter().any(|s| s.starts_with("hex")) && stages.iter().any(|s| s.starts_with("spline")), "{stages:?}");
+    job(&mut record).unwrap();
     for stage in &stages {
-        let t0 = std::time::Instant::now();
         let mut at: Option<std::time::Instant> = None;
         let mut cancel = |_f: f64, s: &str| {
             if s == stage {
@@ -103,19 +97,30 @@ fn cancel_at_every_stage() {
                 true
             }
         };
-        let r = run(&model, &hole, 1, &req, &options(1), &mut cancel);
-        match r {
+        match job(&mut cancel) {
             Err(e) => assert_eq!(e.status(), sddpm::error::Status::Cancelled, "stage {stage}: {e}"),
-            Ok(_) => panic!("stage {stage}: not cancelled"),
+            Ok(()) => panic!("stage {stage}: not cancelled"),
         }
         let after = at.expect("the stage was reached").elapsed();
-        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return (total {:?})", t0.elapsed());
+        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
     }
+    stages
+}
+
+/// Cancelling from the progress callback at any stage of the whole job returns
+/// CANCELLED promptly (within the stage), for every stage the job reports.
+#[test]
+fn cancel_at_every_stage() {
+    let model = Model::default_model().unwrap();
+    let hole = input("cgal_hole.off");
+    let req = ContextRequest::Contexts(vec![Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()]);
+    let stages = assert_cancels_at_every_stage(|p| run(&model, &hole, 1, &req, &options(1), p).map(|_| ()));
+    assert!(stages.len() >= 5, "{stages:?}");
+    assert!(stages.iter().any(|s| s.contains("diffusion")) && stages.iter().any(|s| s.starts_with("hex")) && stages.iter().any(|s| s.starts_with("spline")), "{stages:?}");
 }
 
 /// The automated mode's own stages (temporary volume, subregions, local and global
-/// diffusion, ...) can be cancelled too: cancelling at each stage it reports returns
-/// CANCELLED within that stage.
+/// diffusion, ...) can be cancelled too.
 #[test]
 fn cancel_at_every_stage_of_the_automated_mode() {
     use sddpm::context::auto::AutoOptions;
@@ -124,33 +129,9 @@ fn cancel_at_every_stage_of_the_automated_mode() {
     let model = Model::default_model().unwrap();
     let hole = input("cgal_hole.off");
     let (popts, aopts) = (PolycubeOptions::default(), AutoOptions::default());
-    let mut stages: Vec<String> = Vec::new();
-    let mut record = |_f: f64, s: &str| {
-        if !stages.iter().any(|x| x == s) {
-            stages.push(s.to_string());
-        }
-        true
-    };
-    generate_polycube(&model, &hole, 1, &ContextRequest::Auto, &popts, &aopts, &mut record).unwrap();
+    let stages = assert_cancels_at_every_stage(|p| generate_polycube(&model, &hole, 1, &ContextRequest::Auto, &popts, &aopts, p).map(|_| ()));
     for want in ["temporary volume", "subregions"] {
         assert!(stages.iter().any(|s| s.contains(want)), "no {want:?} stage in {stages:?}");
-    }
-    for stage in &stages {
-        let mut at: Option<std::time::Instant> = None;
-        let mut cancel = |_f: f64, s: &str| {
-            if s == stage {
-                at.get_or_insert_with(std::time::Instant::now);
-                false
-            } else {
-                true
-            }
-        };
-        match generate_polycube(&model, &hole, 1, &ContextRequest::Auto, &popts, &aopts, &mut cancel) {
-            Err(e) => assert_eq!(e.status(), sddpm::error::Status::Cancelled, "stage {stage}: {e}"),
-            Ok(_) => panic!("stage {stage}: not cancelled"),
-        }
-        let after = at.expect("the stage was reached").elapsed();
-        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
     }
 }
 
@@ -161,30 +142,6 @@ fn cancel_at_every_stage_of_the_voxel_fallback() {
     use sddpm::hex::{build_voxel_hex_mesh, Affine, HexOptions};
     let torus = input("cinolib_torus.obj");
     let frame = Affine::similarity(1.0, [0.0; 3]);
-    let mut stages: Vec<String> = Vec::new();
-    let mut record = |_f: f64, s: &str| {
-        if !stages.iter().any(|x| x == s) {
-            stages.push(s.to_string());
-        }
-        true
-    };
-    build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), &mut record).unwrap();
+    let stages = assert_cancels_at_every_stage(|p| build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), p).map(|_| ()));
     assert!(stages.len() >= 3 && stages.iter().any(|s| s.contains("voxel")), "{stages:?}");
-    for stage in &stages {
-        let mut at: Option<std::time::Instant> = None;
-        let mut cancel = |_f: f64, s: &str| {
-            if s == stage {
-                at.get_or_insert_with(std::time::Instant::now);
-                false
-            } else {
-                true
-            }
-        };
-        match build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), &mut cancel) {
-            Err(e) => assert_eq!(e.status(), sddpm::error::Status::Cancelled, "stage {stage}: {e}"),
-            Ok(_) => panic!("stage {stage}: not cancelled"),
-        }
-        let after = at.expect("the stage was reached").elapsed();
-        assert!(after.as_secs_f64() < 5.0, "stage {stage}: {after:?} between the cancel request and the return");
-    }
 }

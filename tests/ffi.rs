@@ -7,6 +7,9 @@ use sddpm::Status;
 use std::ffi::{CStr, CString};
 use std::ptr::{null, null_mut};
 
+#[path = "../fuzz/decode.rs"]
+mod decode;
+
 fn last_message() -> String {
     let mut needed = 0usize;
     unsafe {
@@ -249,18 +252,8 @@ fn fuzz_regression_slow_constraints_end_with_a_status() {
     let data = std::fs::read(format!("{}/tests/data/fuzz/ffi_inputs-slow-constraints.bin", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let (&sel, rest) = data.split_first().unwrap();
     assert_eq!(sel % 6, 4, "the unit is a constraint set");
+    let k = decode::constraints(rest).expect("24 bytes or more");
     unsafe {
-        let mut k = std::mem::zeroed::<SddpmConstraints>();
-        assert_eq!(sddpm_constraints_default(&mut k), Status::Ok);
-        k.cube = (rest[0] % 14) as i32 - 1;
-        k.thc = (rest[1] % 14) as i32 - 1;
-        k.bhc = (rest[2] % 14) as i32 - 1;
-        k.allowed_mask = u16::from_le_bytes([rest[3], rest[4]]);
-        k.required_mask = u16::from_le_bytes([rest[5], rest[6]]) & k.allowed_mask;
-        k.genus = (rest[7] % 6) as i64 - 1;
-        for i in 0..11 {
-            k.per_label[i] = if rest[8 + i] % 3 == 0 { (rest[8 + i] % 5) as i32 } else { -1 };
-        }
         let mut c = null_mut();
         match sddpm_context_new_from_constraints(&k, &mut c) {
             Status::Ok => {

@@ -9,6 +9,9 @@ use libfuzzer_sys::fuzz_target;
 use sddpm::ffi::*;
 use std::ptr::null_mut;
 
+#[path = "../decode.rs"]
+mod decode;
+
 fn f64s(b: &[u8]) -> Vec<f64> {
     b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect()
 }
@@ -78,20 +81,7 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
             4 => {
-                if rest.len() < 24 {
-                    return;
-                }
-                let mut k = std::mem::zeroed::<SddpmConstraints>();
-                let _ = sddpm_constraints_default(&mut k);
-                k.cube = (rest[0] % 14) as i32 - 1;
-                k.thc = (rest[1] % 14) as i32 - 1;
-                k.bhc = (rest[2] % 14) as i32 - 1;
-                k.allowed_mask = u16::from_le_bytes([rest[3], rest[4]]);
-                k.required_mask = u16::from_le_bytes([rest[5], rest[6]]) & k.allowed_mask;
-                k.genus = (rest[7] % 6) as i64 - 1;
-                for i in 0..11 {
-                    k.per_label[i] = if rest[8 + i] % 3 == 0 { (rest[8 + i] % 5) as i32 } else { -1 };
-                }
+                let Some(k) = decode::constraints(rest) else { return };
                 // the full grid with free counts is large: keep fuzzing iterations short
                 if (k.allowed_mask & 0x0fff).count_ones() > 6 {
                     return;
