@@ -64,7 +64,6 @@ pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &st
     Ok(())
 }
 
-/// Axis label: at most 3 significant digits, scientific notation for small or large values.
 /// A tick value that is zero up to rounding (the axis span times 1e-9) is zero, so a
 /// tick at 0 does not read -5.55e-17.
 fn snap(v: f64, span: f64) -> f64 {
@@ -75,6 +74,7 @@ fn snap(v: f64, span: f64) -> f64 {
     }
 }
 
+/// Axis label: at most 3 significant digits, scientific notation for small or large values.
 fn short(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 {

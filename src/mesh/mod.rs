@@ -31,7 +31,8 @@ pub struct TriMesh {
 pub const DEFAULT_WELD_TOLERANCE: f64 = 1e-9;
 
 /// Most triangles an input may have (documented limit, docs/errors.md): above it a
-/// mesh is refused with LIMIT_EXCEEDED right after reading, before any check. The
+/// mesh is refused with LIMIT_EXCEEDED from its header (binary STL, OFF) or right
+/// after parsing (OBJ, ASCII STL), before any check. The
 /// pipeline's own work is bounded by its samples and cells, so this limit is about
 /// memory: a closed surface of 5 million triangles peaks at 2.8 GB while it is read,
 /// welded and checked, the whole main job included (measured, docs/errors.md).
@@ -104,7 +105,7 @@ impl TriMesh {
     /// non-finite coordinates give `Error::InvalidMesh`. Other defects are left
     /// for [`TriMesh::check`].
     pub fn load(path: impl AsRef<Path>, opts: &LoadOptions) -> Result<TriMesh> {
-        // (limits: MAX_FILE_BYTES before reading, MAX_TRIANGLES after parsing)
+        // (limits: MAX_FILE_BYTES before reading, MAX_TRIANGLES from the header or after parsing)
         Self::load_with_stats(path, opts).map(|(m, _)| m)
     }
 

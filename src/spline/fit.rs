@@ -42,7 +42,8 @@ pub struct FitOptions {
     /// surface contributes every k-th vertex, k the smallest stride that keeps
     /// within the bound. Each vertex is a least-squares row over up to 64 basis
     /// functions; without the bound a 5,000,000-triangle input (2.5 million
-    /// vertices) took 12.7 GB and 11 minutes in the fit (docs/errors.md "Limits").
+    /// vertices) took 12.7 GB and 683 s in the fit on a shared machine
+    /// (BENCHMARKS.md "Bad and pathological inputs").
     pub max_reverse_points: usize,
 }
 
