@@ -242,14 +242,22 @@ fn hex_and_spline_handles_contract() {
     }
 }
 
-/// The slow unit the fuzzer found in `ffi_inputs` (docs/fuzzing.md): a constraint set
-/// over five allowed cells with free counts, decoded exactly as the fuzz target decodes
-/// its selector-4 inputs. Before `context::MAX_ASSIGNMENTS` it enumerated for 24 s
-/// under ASan; now it gives contexts or refuses with INVALID_ARGUMENT and a message
-/// that says how to narrow the constraints.
+/// The slow units the fuzzer found in `ffi_inputs` (docs/fuzzing.md): constraint sets
+/// over five or six allowed cells with free counts, decoded exactly as the fuzz target
+/// decodes its selector-4 inputs (fuzz/decode.rs). The first enumerated for 24 s under
+/// ASan before `context::MAX_ASSIGNMENTS`; the two of 2026-12-03 took 100 and 127 s
+/// under ASan on a loaded machine, 2–6 s in a release build, within that bound. Each
+/// gives contexts or a refusal (INVALID_ARGUMENT: too loose, with how to narrow them;
+/// INVALID_CONTEXT: nothing satisfies them).
 #[test]
 fn fuzz_regression_slow_constraints_end_with_a_status() {
-    let data = std::fs::read(format!("{}/tests/data/fuzz/ffi_inputs-slow-constraints.bin", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    for name in ["ffi_inputs-slow-constraints.bin", "ffi_inputs-slow-constraints-2.bin", "ffi_inputs-slow-constraints-3.bin"] {
+        replay_constraints_unit(name);
+    }
+}
+
+fn replay_constraints_unit(name: &str) {
+    let data = std::fs::read(format!("{}/tests/data/fuzz/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let (&sel, rest) = data.split_first().unwrap();
     assert_eq!(sel % 6, 4, "the unit is a constraint set");
     let k = decode::constraints(rest).expect("24 bytes or more");
@@ -262,7 +270,7 @@ fn fuzz_regression_slow_constraints_end_with_a_status() {
                 assert!(n > 0);
                 sddpm_context_free(c);
             }
-            Status::InvalidArgument => {
+            Status::InvalidArgument | Status::InvalidContext => {
                 assert!(c.is_null());
                 let m = last_message();
                 assert!(m.contains("label assignments") || m.contains("constraint"), "{m}");
