@@ -250,19 +250,19 @@ pub fn generate_auto(
     check_progress(progress, 0.02, "temporary volume")?;
     let surface_volume = input.alignment.mesh.check().volume.abs();
     let (vol, resolution) = temporary_volume(&input.alignment.mesh, aopts.resolution, surface_volume)?;
+    let bb = crate::geometry::Aabb::of_points(&input.alignment.mesh.vertices);
     let ratio = vol.volume() / surface_volume.max(f64::MIN_POSITIVE);
     if !(THIN_PART_FRACTION..=1.0 / THIN_PART_FRACTION).contains(&ratio) {
         // The finest lattice still misses most of the solid, or a wall thinner than
         // a voxel fills whole voxels: the subregions' fills and genera would
         // describe the lattice, not the part. Say why instead.
-        let bb = crate::geometry::Aabb::of_points(&input.alignment.mesh.vertices);
         let e = bb.size();
         let (thin, long) = (e.iter().copied().fold(f64::INFINITY, f64::min), e.iter().copied().fold(0.0, f64::max));
         return Err(Error::VerificationFailed(format!(
             "automated mode: the temporary volume at {resolution} voxels along the longest side holds {:.3e} of the surface's volume {:.3e} ({:.1} %): the part is thinner than a voxel (thinnest bounding-box extent {:.3e}, {:.1e} of the longest {:.3e}), so its subregions cannot be measured; give a context (--labels) or constraints instead",
             vol.volume(),
             surface_volume,
-            100.0 * vol.volume() / surface_volume.max(f64::MIN_POSITIVE),
+            100.0 * ratio,
             thin,
             thin / long.max(f64::MIN_POSITIVE),
             long
@@ -277,7 +277,6 @@ pub fn generate_auto(
         boxes: Vec::new(),
         chosen_box: None,
     };
-    let bb = crate::geometry::Aabb::of_points(&input.alignment.mesh.vertices);
     let shapes: Vec<SplitRatios> = match ratios {
         Some(r) => vec![r.clone()],
         None => {

@@ -84,8 +84,7 @@ pub(crate) fn read_file(path: &Path) -> Result<(Vec<u8>, Format)> {
         let mut head = [0u8; 84];
         let mut f = std::fs::File::open(path).map_err(|e| Error::io(&shown, e))?;
         f.read_exact(&mut head).map_err(|e| Error::io(&shown, e))?;
-        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
-        if 84 + 50 * n == len {
+        if let Some(n) = binary_stl_count(&head, len) {
             super::check_triangle_limit(n as usize, &shown.to_string())?;
         }
     }
@@ -155,11 +154,19 @@ fn index_u32(i: u64, shown: &str) -> Result<u32> {
 /// A binary STL is recognised by its size, 84 + 50 n bytes with n the count at
 /// offset 80, whatever its 80-byte header says (many binary files start with "solid").
 pub(crate) fn is_binary_stl(bytes: &[u8]) -> bool {
-    if bytes.len() < 84 {
-        return false;
-    }
-    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
-    84 + 50 * n == bytes.len() as u64
+    binary_stl_count(bytes, bytes.len() as u64).is_some()
+}
+
+/// The triangle count at offset 80 of a file starting with `head` (at least 84
+/// bytes; None if shorter).
+fn declared_stl_count(head: &[u8]) -> Option<u64> {
+    head.get(80..84).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as u64)
+}
+
+/// The count of a binary STL of `len` bytes starting with `head`, if the size
+/// formula 84 + 50 n holds.
+fn binary_stl_count(head: &[u8], len: u64) -> Option<u64> {
+    declared_stl_count(head).filter(|&n| 84 + 50 * n == len)
 }
 
 fn starts_with_solid(bytes: &[u8]) -> bool {
@@ -178,8 +185,8 @@ fn parse_stl(bytes: &[u8], shown: &str) -> Result<Soup> {
 }
 
 fn parse_stl_binary(bytes: &[u8], shown: &str) -> Result<Soup> {
-    if bytes.len() >= 84 {
-        super::check_triangle_limit(u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize, shown)?;
+    if let Some(n) = declared_stl_count(bytes) {
+        super::check_triangle_limit(n as usize, shown)?;
     }
     // stl_io decides ASCII vs binary from a leading "solid "; our caller already
     // decided (by the size formula), so hand it a copy whose header cannot look ASCII.
