@@ -4,6 +4,8 @@
 # then one markdown row per mesh from its report.json (BENCHMARKS.md "Main job"),
 # and a second table of the spline stage (Gauss-point Jacobians, fit to the surface).
 # Usage: bash benches/run_main_job.sh [OUT]   (default build/runs). Prints the table.
+# MESHES="cgal_spool hexgen_bust" runs only those (the table then also shows the
+# meshes already in OUT/status.txt, the latest run of each).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/runs}
@@ -11,6 +13,7 @@ mkdir -p "$out"
 cargo build --release -q
 for f in tests/data/meshes/*.off tests/data/meshes/*.obj tests/data/meshes/*.stl; do
   n=$(basename "${f%.*}")
+  if [ -n "${MESHES:-}" ] && [[ " $MESHES " != *" $n "* ]]; then continue; fi
   start=$(date +%s.%N)
   if ./target/release/sddpm run "$f" -o "$out/$n" -q 2> "$out/$n.err"; then rc=0; else rc=$?; fi
   echo "$n $rc $(echo "$(date +%s.%N) - $start" | bc)" >> "$out/status.txt"

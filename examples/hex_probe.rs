@@ -11,8 +11,12 @@ fn main() -> sddpm::Result<()> {
     let mesh = TriMesh::load(std::path::Path::new(&a[1]), &LoadOptions::default())?;
     let genus = mesh.validate()?.genus.unwrap();
     if a[2].starts_with("voxel") {
+        let mut opts = sddpm::hex::HexOptions::default();
+        if let Ok(n) = a[2]["voxel".len()..].parse() {
+            opts.voxel_resolution = n; // e.g. voxel48
+        }
         let t = std::time::Instant::now();
-        let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &Default::default(), &mut sddpm::error::NoProgress)?;
+        let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut sddpm::error::NoProgress)?;
         let q = &r.quality;
         println!(
             "{}: elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} volume {:.4} vs {:.4} ({:.1} s)",

@@ -163,10 +163,20 @@ typedef struct sddpm_hex_options {
   uint32_t hex_candidates;
   // Mesh the best-fitting diffused candidate when none passed verification (default true).
   bool accept_unverified;
-  // When every candidate's mesh keeps inverted elements, also mesh the input on a
-  // voxel lattice and keep that mesh when it is better (default true; the quality
-  // then reports `verified_polycube` false).
+  // When no candidate's mesh meets the goals below, also mesh the input on a voxel
+  // lattice and keep that mesh when it ranks better (default true; the quality then
+  // reports `verified_polycube` false).
   bool voxel_fallback;
+  // Voxels along the longest bounding-box edge of the fallback's first lattice
+  // (default 24; doubled while its topology is wrong, refined while it misses the goals).
+  uint32_t voxel_resolution;
+  // Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
+  // two-sided Hausdorff distance to the input over the bounding-box diagonal
+  // (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
+  // minimum scaled Jacobian.
+  double goal_min_scaled_jacobian;
+  double goal_mean_scaled_jacobian;
+  double goal_hausdorff;
 } sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short

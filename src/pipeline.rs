@@ -111,9 +111,10 @@ pub struct RunOptions {
     /// them counted in the report (default false).
     pub require_valid_hex: bool,
     /// How many candidates are meshed: the verified ones best score first or, when
-    /// none verified, the unverified ones of [`fallback_order`]. The hex mesh with the fewest inverted elements, then
-    /// the highest minimum scaled Jacobian, is kept; the builds stop at the first mesh
-    /// with no inverted element and a minimum scaled Jacobian of at least 0.3.
+    /// none verified, the unverified ones of [`fallback_order`]. The best hex mesh by
+    /// [`crate::hex::QualityGoals::rank`] (fewest inverted elements, then fewest missed
+    /// goals, then highest minimum scaled Jacobian) is kept; the builds stop at the
+    /// first mesh that meets every goal of `hex.goals`.
     /// Default 4: a further candidate costs one more hex build (1.8-6.9 s at level 2
     /// in BENCHMARKS.md's hex table 1),
     /// spent only while the meshes so far are not good enough; BENCHMARKS.md ("Main
@@ -143,8 +144,11 @@ pub struct HexAttempt {
     pub candidate: Option<usize>,
     pub context: String,
     pub min_scaled_jacobian: f64,
+    pub mean_scaled_jacobian: f64,
     pub inverted: usize,
     pub hausdorff_relative: f64,
+    /// How many of `HexOptions::goals` the mesh misses (0-3).
+    pub goals_missed: usize,
     pub seconds: f64,
 }
 
@@ -247,18 +251,21 @@ pub fn run(
     let verification_error = match (verified, verification_error) {
         (true, _) => None,
         (false, _) if voxel => Some(format!(
-            "every polycube candidate's hex mesh kept inverted elements (best: {}); the mesh comes from the grid-based fallback ({}), not from the polycube",
+            "no polycube candidate's hex mesh met the quality goals (best: {}); the mesh comes from the grid-based fallback ({}: min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %), which ranks better, not from the polycube",
             attempts
                 .iter()
                 .filter(|a| a.candidate.is_some())
-                .min_by(|a, b| rank(a.inverted, a.min_scaled_jacobian).partial_cmp(&rank(b.inverted, b.min_scaled_jacobian)).unwrap_or(std::cmp::Ordering::Equal))
-                .map(|a| format!("{} inverted for {}", a.inverted, a.context))
+                .min_by(|a, b| a.rank().partial_cmp(&b.rank()).unwrap_or(std::cmp::Ordering::Equal))
+                .map(|a| a.describe())
                 .unwrap_or_else(|| "no mesh".into()),
-            hex.domain
+            hex.domain,
+            hex.quality.min,
+            hex.quality.mean,
+            100.0 * hex.hausdorff_relative
         )),
         (false, Some(e)) => Some(e),
         (false, None) => Some(format!(
-            "the hex meshes of the verified candidates kept inverted elements; the best mesh came from unverified candidate {}",
+            "the hex meshes of the verified candidates ranked below (inverted elements, then quality goals missed) the mesh of unverified candidate {}",
             pr.candidates[candidate].context
         )),
     };
@@ -414,10 +421,12 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
     order
 }
 
-/// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh:
-/// fewest inverted elements, then highest minimum scaled Jacobian; stops early once a
-/// mesh has no inverted element and a minimum scaled Jacobian of at least 0.3.
-/// Progress: 50-85 % of the caller's range.
+/// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh
+/// by [`crate::hex::QualityGoals::rank`] (fewest inverted elements, then fewest
+/// missed goals, then highest minimum scaled Jacobian); stops early once a mesh meets
+/// every goal of `hex_opts.goals`. When the best polycube mesh still misses one, the
+/// grid-based fallback is also built (if `hex_opts.voxel_fallback`) and kept when it
+/// ranks better. Progress: 50-85 % of the caller's range.
 pub fn build_hex_for_polycube(
     pr: &PolycubeResult,
     order: &[usize],
@@ -425,6 +434,7 @@ pub fn build_hex_for_polycube(
     hex_opts: &HexOptions,
     progress: &mut dyn Progress,
 ) -> Result<(usize, Vec<HexAttempt>, HexResult)> {
+    let goals = &hex_opts.goals;
     let mut best: Option<(usize, HexResult)> = None;
     let mut attempts = Vec::new();
     let n = order.len();
@@ -443,24 +453,24 @@ pub fn build_hex_for_polycube(
                 continue;
             }
         };
-        attempts.push(HexAttempt::of(Some(ci), cand.context.names(), &r, th));
-        if beats(&r, &best) {
+        attempts.push(HexAttempt::of(Some(ci), cand.context.names(), &r, goals, th));
+        if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {
             best = Some((ci, r));
         }
-        if best.as_ref().is_some_and(|(_, b)| b.quality.inverted == 0 && b.quality.min >= 0.3) {
+        if best.as_ref().is_some_and(|(_, b)| goals.missed(b) == 0) {
             break; // good enough: do not spend another build
         }
     }
-    // every polycube mesh folds (or none could be built): the grid-based fallback
-    let folded = best.as_ref().is_none_or(|(_, b)| b.quality.inverted > 0);
-    if hex_opts.voxel_fallback && folded {
+    // no polycube mesh meets the goals (or none could be built): the grid-based fallback
+    let short = best.as_ref().is_none_or(|(_, b)| goals.missed(b) > 0);
+    if hex_opts.voxel_fallback && short {
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };
         let identity = Affine::similarity(1.0, [0.0; 3]);
         match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
             Ok(r) => {
-                attempts.push(HexAttempt::of(None, r.domain.clone(), &r, th));
-                if beats(&r, &best) {
+                attempts.push(HexAttempt::of(None, r.domain.clone(), &r, goals, th));
+                if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {
                     // the candidate index stays the best polycube attempt's (or the first)
                     let ci = best.as_ref().map(|(c, _)| *c).or(order.first().copied()).unwrap_or(0);
                     best = Some((ci, r));
@@ -480,27 +490,32 @@ pub fn build_hex_for_polycube(
     }
 }
 
-/// How meshes are compared (smaller is better): fewer inverted elements, then a higher minimum scaled Jacobian.
-fn rank(inverted: usize, min_scaled_jacobian: f64) -> (usize, f64) {
-    (inverted, -min_scaled_jacobian)
-}
-
-/// Is `r` a better mesh than the best so far?
-fn beats(r: &HexResult, best: &Option<(usize, HexResult)>) -> bool {
-    match best {
-        None => true,
-        Some((_, b)) => rank(r.quality.inverted, r.quality.min) < rank(b.quality.inverted, b.quality.min),
-    }
-}
-
 impl HexAttempt {
-    fn of(candidate: Option<usize>, context: String, r: &HexResult, started: Instant) -> Self {
+    /// The ranking key of [`crate::hex::QualityGoals::rank`] from the recorded figures.
+    fn rank(&self) -> (usize, usize, f64) {
+        (self.inverted, self.goals_missed, -self.min_scaled_jacobian)
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "{}: {} inverted, min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %",
+            self.context,
+            self.inverted,
+            self.min_scaled_jacobian,
+            self.mean_scaled_jacobian,
+            100.0 * self.hausdorff_relative
+        )
+    }
+
+    fn of(candidate: Option<usize>, context: String, r: &HexResult, goals: &crate::hex::QualityGoals, started: Instant) -> Self {
         HexAttempt {
             candidate,
             context,
             min_scaled_jacobian: r.quality.min,
+            mean_scaled_jacobian: r.quality.mean,
             inverted: r.quality.inverted,
             hausdorff_relative: r.hausdorff_relative,
+            goals_missed: goals.missed(r),
             seconds: started.elapsed().as_secs_f64(),
         }
     }

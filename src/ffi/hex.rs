@@ -48,10 +48,20 @@ pub struct SddpmHexOptions {
     pub hex_candidates: u32,
     /// Mesh the best-fitting diffused candidate when none passed verification (default true).
     pub accept_unverified: bool,
-    /// When every candidate's mesh keeps inverted elements, also mesh the input on a
-    /// voxel lattice and keep that mesh when it is better (default true; the quality
-    /// then reports `verified_polycube` false).
+    /// When no candidate's mesh meets the goals below, also mesh the input on a voxel
+    /// lattice and keep that mesh when it ranks better (default true; the quality then
+    /// reports `verified_polycube` false).
     pub voxel_fallback: bool,
+    /// Voxels along the longest bounding-box edge of the fallback's first lattice
+    /// (default 24; doubled while its topology is wrong, refined while it misses the goals).
+    pub voxel_resolution: u32,
+    /// Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
+    /// two-sided Hausdorff distance to the input over the bounding-box diagonal
+    /// (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
+    /// minimum scaled Jacobian.
+    pub goal_min_scaled_jacobian: f64,
+    pub goal_mean_scaled_jacobian: f64,
+    pub goal_hausdorff: f64,
 }
 
 /// Quality summary of a hex mesh.
@@ -120,6 +130,10 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
             hex_candidates: r.hex_candidates as u32,
             accept_unverified: r.accept_unverified,
             voxel_fallback: h.voxel_fallback,
+            voxel_resolution: h.voxel_resolution as u32,
+            goal_min_scaled_jacobian: h.goals.min_scaled_jacobian,
+            goal_mean_scaled_jacobian: h.goals.mean_scaled_jacobian,
+            goal_hausdorff: h.goals.hausdorff,
         };
         Ok(())
     }
@@ -138,6 +152,15 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     if !(o.threshold > 0.0 && o.threshold.is_finite()) || !(o.feature_angle.is_finite()) || !(o.optimise_target.is_finite()) {
         return Err(Error::InvalidArgument("hex options: threshold must be positive and finite, angles and targets finite".into()));
     }
+    if !(o.goal_min_scaled_jacobian.is_finite() && o.goal_mean_scaled_jacobian.is_finite() && o.goal_hausdorff >= 0.0 && o.goal_hausdorff.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "hex options: goals must be finite and the Hausdorff goal non-negative (min {}, mean {}, Hausdorff {})",
+            o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff
+        )));
+    }
+    if o.voxel_resolution < 2 {
+        return Err(Error::InvalidArgument(format!("hex options: voxel_resolution {} (at least 2)", o.voxel_resolution)));
+    }
     h.level = (o.level >= 0).then_some(o.level as u32);
     h.min_level = o.min_level;
     h.max_level = o.max_level;
@@ -149,6 +172,12 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     h.optimise_passes = o.optimise_passes as usize;
     h.optimise_target = o.optimise_target;
     h.voxel_fallback = o.voxel_fallback;
+    h.voxel_resolution = o.voxel_resolution as usize;
+    h.goals = crate::hex::QualityGoals {
+        min_scaled_jacobian: o.goal_min_scaled_jacobian,
+        mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
+        hausdorff: o.goal_hausdorff,
+    };
     Ok((h, (o.hex_candidates as usize).max(1), o.accept_unverified))
 }
 
@@ -410,5 +439,28 @@ pub unsafe extern "C" fn sddpm_hex_mesh_write(h: *const SddpmHexMesh, path: *con
             f if f == SddpmHexFormat::Lsdyna as i32 => crate::export::hexfmt::write_lsdyna(&p, &h.mesh, "sddpm hex mesh"),
             f => Err(Error::InvalidArgument(format!("format {f} is not an sddpm_hex_format (0 VTU, 1 legacy VTK, 2 Medit, 3 LS-DYNA)"))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The C defaults are the core's, and goals that cannot be compared are refused
+    /// with the values named.
+    #[test]
+    fn hex_options_round_trip_and_bad_goals() {
+        let mut o = std::mem::MaybeUninit::<SddpmHexOptions>::uninit();
+        assert_eq!(unsafe { sddpm_hex_options_default(o.as_mut_ptr()) }, Status::Ok);
+        let o = unsafe { o.assume_init() };
+        let (h, _, _) = hex_options(Some(&o)).unwrap();
+        assert_eq!(h.goals, crate::hex::QualityGoals::default());
+        assert_eq!(h.voxel_resolution, HexOptions::default().voxel_resolution);
+        for bad in [SddpmHexOptions { goal_hausdorff: f64::NAN, ..o }, SddpmHexOptions { goal_hausdorff: -0.01, ..o }, SddpmHexOptions { goal_mean_scaled_jacobian: f64::INFINITY, ..o }] {
+            let e = hex_options(Some(&bad)).unwrap_err().to_string();
+            assert!(e.contains("goals"), "{e}");
+        }
+        let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
+        assert!(e.contains("voxel_resolution 1"), "{e}");
     }
 }

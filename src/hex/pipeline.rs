@@ -119,12 +119,24 @@ pub struct HexOptions {
     pub release_distance: f64,
     /// Extra random surface samples for the Hausdorff distance.
     pub hausdorff_samples: usize,
-    /// When every polycube candidate's mesh keeps inverted elements, also mesh the
-    /// input on a voxel lattice ([`super::voxel`]) and keep that mesh when it is
+    /// When no polycube candidate's mesh meets [`HexOptions::goals`], also mesh the
+    /// input on a voxel lattice ([`super::voxel`]) and keep that mesh when it ranks
     /// better (default true: on the 16 test parts it gave valid meshes where the
-    /// polycube meshes of 6 folded; BENCHMARKS.md "Main job"). The result says so
+    /// polycube meshes of 6 folded, and meshes within the goals where single-cube
+    /// polycubes missed the surface; BENCHMARKS.md "Main job"). The result says so
     /// (`HexResult::domain`). Used by the main job and by sddpm_hex_mesh_build.
     pub voxel_fallback: bool,
+    /// Voxels along the longest bounding-box edge of the fallback's first lattice
+    /// (default [`super::voxel::VOXEL_START_RESOLUTION`], 24); doubled while the
+    /// lattice's topology differs from the input's.
+    pub voxel_resolution: usize,
+    /// Finer lattices the fallback may try after its first when the mesh misses
+    /// [`HexOptions::goals`] (default 2; each within `max_elements`).
+    pub voxel_refinements: usize,
+    /// The quality a mesh should reach (issue 6's goals). Meshes are ranked by
+    /// inverted elements, then by how many goals they miss, then by minimum scaled
+    /// Jacobian; a polycube mesh that misses one also gets the voxel fallback tried.
+    pub goals: QualityGoals,
     /// Return the mapped mesh when the quality steps end below its minimum scaled
     /// Jacobian (default true; false only to inspect the quality steps).
     pub keep_better_mapped: bool,
@@ -154,7 +166,51 @@ impl Default for HexOptions {
             hausdorff_samples: 20_000,
             keep_better_mapped: true,
             voxel_fallback: true,
+            voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,
+            voxel_refinements: 2,
+            goals: QualityGoals::default(),
         }
+    }
+}
+
+/// Quality targets of a finished mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct QualityGoals {
+    /// Smallest acceptable minimum scaled Jacobian (default 0.3).
+    pub min_scaled_jacobian: f64,
+    /// Smallest acceptable mean scaled Jacobian (default 0.85).
+    pub mean_scaled_jacobian: f64,
+    /// Largest acceptable two-sided Hausdorff distance between the mesh boundary and
+    /// the input, relative to the bounding-box diagonal (default 0.01).
+    pub hausdorff: f64,
+}
+
+impl Default for QualityGoals {
+    fn default() -> Self {
+        QualityGoals { min_scaled_jacobian: 0.3, mean_scaled_jacobian: 0.85, hausdorff: 0.01 }
+    }
+}
+
+impl QualityGoals {
+    /// How many of the three goals `r` misses (a mesh with inverted elements misses
+    /// the minimum one whatever the threshold).
+    pub fn missed(&self, r: &HexResult) -> usize {
+        let q = &r.quality;
+        [q.inverted > 0 || !(q.min >= self.min_scaled_jacobian), !(q.mean >= self.mean_scaled_jacobian), !(r.hausdorff_relative <= self.hausdorff)]
+            .iter()
+            .filter(|&&m| m)
+            .count()
+    }
+
+    /// Ranking key of a mesh, smaller is better: inverted elements, goals missed,
+    /// then the minimum scaled Jacobian (higher first).
+    pub fn rank(&self, r: &HexResult) -> (usize, usize, f64) {
+        (r.quality.inverted, self.missed(r), -r.quality.min)
+    }
+
+    /// Is `r` better than `best` by [`QualityGoals::rank`]?
+    pub fn beats(&self, r: &HexResult, best: Option<&HexResult>) -> bool {
+        best.is_none_or(|b| self.rank(r).partial_cmp(&self.rank(b)) == Some(std::cmp::Ordering::Less))
     }
 }
 

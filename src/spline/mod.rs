@@ -720,8 +720,12 @@ pub struct OutputOptions {
     pub vtk: Option<String>,
     /// Control mesh (default Some("spline_control.vtk")).
     pub control_vtk: Option<String>,
-    /// Sub-cells per direction and element in the sampled VTK (default 4).
+    /// Sub-cells per direction and element in the sampled VTK (default 4), lowered
+    /// (to 1 at least) so that the file has at most `vtk_max_cells` cells.
     pub vtk_samples: usize,
+    /// Cap on the sampled VTK's cells (default 500,000, about 140 MB: 4 samples on
+    /// the 144,000 elements of a voxel-68 cgal_joint wrote 9.2 M cells, 2.5 GB).
+    pub vtk_max_cells: usize,
     /// Sparse BEXT rows (default: `SplineOptions::sparse_bext` of the spline).
     pub sparse_bext: Option<bool>,
     pub deck: crate::export::lsdyna::DeckOptions,
@@ -735,10 +739,21 @@ impl Default for OutputOptions {
             vtk: Some("spline.vtk".into()),
             control_vtk: Some("spline_control.vtk".into()),
             vtk_samples: 4,
+            vtk_max_cells: 500_000,
             sparse_bext: None,
             deck: Default::default(),
         }
     }
+}
+
+/// Samples per direction and element of the sampled VTK: `o.vtk_samples`, fewer
+/// when `elements` x samples^3 would pass `o.vtk_max_cells`, and at least 1.
+fn vtk_samples(o: &OutputOptions, elements: usize) -> usize {
+    let mut n = o.vtk_samples.max(1);
+    while n > 1 && elements.saturating_mul(n * n * n) > o.vtk_max_cells {
+        n -= 1;
+    }
+    n
 }
 
 /// Write the spline's files into `dir` (BEXT, the LS-DYNA deck that includes it,
@@ -752,7 +767,7 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
     bext::write_bext(&dir.join(&o.bext), sp, sparse)?;
     lsdyna::write_iga_deck(&dir.join(&o.lsdyna), &o.bext, &o.deck)?;
     if let Some(v) = &o.vtk {
-        spline_vtk::write_spline_vtk(&dir.join(v), sp, o.vtk_samples)?;
+        spline_vtk::write_spline_vtk(&dir.join(v), sp, vtk_samples(o, sp.elems.len()))?;
     }
     if let Some(v) = &o.control_vtk {
         spline_vtk::write_control_mesh_vtk(&dir.join(v), sp)?;
@@ -766,4 +781,26 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
         m.insert("bext_sparse".into(), sparse.into());
     }
     Ok(j)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sampled VTK keeps 4 samples on the main job's level-2 meshes (2,592
+    /// elements: 165,888 cells) and drops to 1 on a 144,000-element one.
+    #[test]
+    fn sampled_vtk_stays_under_its_cell_cap() {
+        let o = OutputOptions::default();
+        assert_eq!(vtk_samples(&o, 2_592), 4);
+        assert_eq!(vtk_samples(&o, 25_469), 2);
+        assert_eq!(vtk_samples(&o, 143_996), 1);
+        assert_eq!(vtk_samples(&o, 10_000_000), 1);
+        assert_eq!(vtk_samples(&OutputOptions { vtk_samples: 0, ..o.clone() }, 1), 1);
+        for e in [1, 100, 7_813, 7_814, 62_500, 62_501] {
+            let n = vtk_samples(&o, e);
+            assert!(n == 1 || e * n * n * n <= o.vtk_max_cells, "{e}: {n}");
+            assert!(n == 4 || e * (n + 1).pow(3) > o.vtk_max_cells, "{e}: {n} could be larger");
+        }
+    }
 }

@@ -116,7 +116,9 @@ class HexOptions(C.Structure):
                 ("max_elements", C.c_size_t), ("feature_angle", C.c_double), ("pillow", C.c_bool),
                 ("smooth_iterations", C.c_uint32), ("optimise_passes", C.c_uint32), ("optimise_target", C.c_double),
                 ("hex_candidates", C.c_uint32), ("accept_unverified", C.c_bool),
-                ("voxel_fallback", C.c_bool)]
+                ("voxel_fallback", C.c_bool), ("voxel_resolution", C.c_uint32),
+                ("goal_min_scaled_jacobian", C.c_double), ("goal_mean_scaled_jacobian", C.c_double),
+                ("goal_hausdorff", C.c_double)]
 
 
 class HexQuality(C.Structure):
