@@ -163,9 +163,10 @@ typedef struct sddpm_hex_options {
   uint32_t hex_candidates;
   // Mesh the best-fitting diffused candidate when none passed verification (default true).
   bool accept_unverified;
-  // When no candidate's mesh meets the goals below, also mesh the input on a voxel
-  // lattice and keep that mesh when it ranks better (default true; the quality then
-  // reports `verified_polycube` false).
+  // When no candidate's mesh meets the goals below (with a fixed level: when every
+  // one keeps inverted elements), also mesh the input on a voxel lattice and keep
+  // that mesh when it ranks better (default true; the quality then reports
+  // `verified_polycube` false).
   bool voxel_fallback;
   // Voxels along the longest bounding-box edge of the fallback's first lattice
   // (default 24; doubled while its topology is wrong, refined while it misses the goals).

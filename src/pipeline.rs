@@ -424,9 +424,9 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
 /// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh
 /// by [`crate::hex::QualityGoals::rank`] (fewest inverted elements, then fewest
 /// missed goals, then highest minimum scaled Jacobian); stops early once a mesh meets
-/// every goal of `hex_opts.goals`. When the best polycube mesh still misses one, the
-/// grid-based fallback is also built (if `hex_opts.voxel_fallback`) and kept when it
-/// ranks better. Progress: 50-85 % of the caller's range.
+/// every goal of `hex_opts.goals`. When the best polycube mesh still misses one (with
+/// a fixed `hex_opts.level`: when it keeps inverted elements), the grid-based
+/// fallback is also built (if `hex_opts.voxel_fallback`) and kept when it ranks better. Progress: 50-85 % of the caller's range.
 pub fn build_hex_for_polycube(
     pr: &PolycubeResult,
     order: &[usize],
@@ -461,8 +461,10 @@ pub fn build_hex_for_polycube(
             break; // good enough: do not spend another build
         }
     }
-    // no polycube mesh meets the goals (or none could be built): the grid-based fallback
-    let short = best.as_ref().is_none_or(|(_, b)| goals.missed(b) > 0);
+    // no polycube mesh meets the goals (or none could be built): the grid-based
+    // fallback; with a level the caller fixed, only when every mesh folds (the
+    // caller asked for that polycube refinement, not for the best mesh of any kind)
+    let short = best.as_ref().is_none_or(|(_, b)| if hex_opts.level.is_some() { b.quality.inverted > 0 } else { goals.missed(b) > 0 });
     if hex_opts.voxel_fallback && short {
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };

@@ -145,3 +145,19 @@ fn cancel_at_every_stage_of_the_voxel_fallback() {
     let stages = assert_cancels_at_every_stage(|p| build_voxel_hex_mesh(&torus, &frame, 1, &HexOptions::default(), p).map(|_| ()));
     assert!(stages.len() >= 3 && stages.iter().any(|s| s.contains("voxel")), "{stages:?}");
 }
+
+/// A level the caller fixes is honoured: the grid-based fallback replaces a valid
+/// polycube mesh only when the level is chosen automatically (HexOptions::voxel_fallback).
+#[test]
+fn a_fixed_level_keeps_the_valid_polycube_mesh() {
+    let model = Model::default_model().unwrap();
+    let torus = input("cinolib_torus.obj");
+    let req = ContextRequest::Contexts(vec![Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()]);
+    let r = run(&model, &torus, 1, &req, &options(1), &mut NoProgress).unwrap();
+    assert_eq!(r.hex.level, 1);
+    assert_eq!(r.hex.quality.inverted, 0, "{:?}", r.hex.quality);
+    assert!(r.hex.from_polycube(), "{}", r.hex.domain);
+    assert!(r.hex_attempts.iter().all(|a| a.candidate.is_some()), "a voxel mesh was built");
+    // the case the rule is for: the level-1 mesh misses a goal (the mean or the fit)
+    assert!(sddpm::hex::QualityGoals::default().missed(&r.hex) > 0, "{:?}, Hausdorff {}", r.hex.quality, r.hex.hausdorff_relative);
+}

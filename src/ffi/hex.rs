@@ -48,9 +48,10 @@ pub struct SddpmHexOptions {
     pub hex_candidates: u32,
     /// Mesh the best-fitting diffused candidate when none passed verification (default true).
     pub accept_unverified: bool,
-    /// When no candidate's mesh meets the goals below, also mesh the input on a voxel
-    /// lattice and keep that mesh when it ranks better (default true; the quality then
-    /// reports `verified_polycube` false).
+    /// When no candidate's mesh meets the goals below (with a fixed level: when every
+    /// one keeps inverted elements), also mesh the input on a voxel lattice and keep
+    /// that mesh when it ranks better (default true; the quality then reports
+    /// `verified_polycube` false).
     pub voxel_fallback: bool,
     /// Voxels along the longest bounding-box edge of the fallback's first lattice
     /// (default 24; doubled while its topology is wrong, refined while it misses the goals).

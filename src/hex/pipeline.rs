@@ -119,9 +119,10 @@ pub struct HexOptions {
     pub release_distance: f64,
     /// Extra random surface samples for the Hausdorff distance.
     pub hausdorff_samples: usize,
-    /// When no polycube candidate's mesh meets [`HexOptions::goals`], also mesh the
-    /// input on a voxel lattice ([`super::voxel`]) and keep that mesh when it ranks
-    /// better (default true: on the 16 test parts it gave valid meshes where the
+    /// When no polycube candidate's mesh meets [`HexOptions::goals`] (with a fixed
+    /// `level`: when every one keeps inverted elements), also mesh the input on a
+    /// voxel lattice ([`super::voxel`]) and keep that mesh when it ranks better
+    /// (default true: on the 16 test parts it gave valid meshes where the
     /// polycube meshes of 6 folded, and meshes within the goals where single-cube
     /// polycubes missed the surface; BENCHMARKS.md "Main job"). The result says so
     /// (`HexResult::domain`). Used by the main job and by sddpm_hex_mesh_build.
