@@ -40,8 +40,8 @@ for n in sorted(status):
     labels = ",".join(x for x in pc["names"].split(",") if x != "null")
     dom = h.get("domain", "polycube")
     if dom != "polycube":
-        # every polycube mesh folded: the grid-based fallback's mesh was kept
-        labels = f"**{dom}** (polycube {labels} folded)"
+        # no polycube mesh met the quality goals: the grid-based fallback's mesh ranked better
+        labels = f"**{dom}** (polycube {labels} below the goals)"
     tris = r["input"].get("triangles", "")
     g = r["input"].get("genus", pc.get("genus", ""))
     meshed = len(h.get("candidates_meshed") or [])

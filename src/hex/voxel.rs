@@ -165,8 +165,16 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
         // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
         let factor = (1.1 * last.4 / opts.goals.hausdorff).clamp(1.25, 2.0);
-        let next = ((last.0 as f64 * factor).ceil() as usize).min(VOXEL_MAX_RESOLUTION);
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, next, genus, opts, &mut tried)?;
+        let mut next = ((last.0 as f64 * factor).ceil() as usize).min(VOXEL_MAX_RESOLUTION);
+        // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
+        // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
+        let lattice = loop {
+            let (lattice, fits) = topology_lattice(&fr.sw.mesh, next, genus, opts, &mut tried)?;
+            if lattice.is_some() || !fits || next >= VOXEL_MAX_RESOLUTION {
+                break lattice;
+            }
+            next = ((next as f64 * 1.25).ceil() as usize).min(VOXEL_MAX_RESOLUTION);
+        };
         let Some(lattice) = lattice else { break };
         let mut sub = SubProgress { inner: progress, lo: share * k as f64, hi: share * (k + 1) as f64 };
         let r = mesh_lattice(lattice, next, &fr, opts, t_all, &mut sub)?;
