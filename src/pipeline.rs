@@ -426,7 +426,8 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
 /// missed goals, then highest minimum scaled Jacobian); stops early once a mesh meets
 /// every goal of `hex_opts.goals`. When the best polycube mesh still misses one (with
 /// a fixed `hex_opts.level`: when it keeps inverted elements), the grid-based
-/// fallback is also built (if `hex_opts.voxel_fallback`) and kept when it ranks better. Progress: 50-85 % of the caller's range.
+/// fallback is also built (if `hex_opts.voxel_fallback`) and kept when it ranks
+/// better. Progress: 50-85 % of the caller's range.
 pub fn build_hex_for_polycube(
     pr: &PolycubeResult,
     order: &[usize],

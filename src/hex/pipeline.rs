@@ -136,7 +136,8 @@ pub struct HexOptions {
     pub voxel_refinements: usize,
     /// The quality a mesh should reach (issue 6's goals). Meshes are ranked by
     /// inverted elements, then by how many goals they miss, then by minimum scaled
-    /// Jacobian; a polycube mesh that misses one also gets the voxel fallback tried.
+    /// Jacobian; when the polycube meshes miss one (and the level is automatic), the
+    /// voxel fallback is tried too.
     pub goals: QualityGoals,
     /// Return the mapped mesh when the quality steps end below its minimum scaled
     /// Jacobian (default true; false only to inspect the quality steps).

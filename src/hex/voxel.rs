@@ -164,7 +164,8 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         }
         // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
         // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
-        let factor = (1.1 * last.4 / opts.goals.hausdorff).clamp(1.25, 2.0);
+        let ratio = 1.1 * last.4 / opts.goals.hausdorff; // NaN for a NaN goal or distance
+        let factor = if ratio.is_nan() { 2.0 } else { ratio.clamp(1.25, 2.0) };
         let mut next = ((last.0 as f64 * factor).ceil() as usize).min(VOXEL_MAX_RESOLUTION);
         // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
         // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
@@ -186,12 +187,13 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         }
         best = r;
     }
-    if let Some(d) = best.stages.first_mut().and_then(|s| s.details.as_object_mut()) {
-        d.insert("resolutions_tried".into(), serde_json::json!(tried));
-        d.insert("lattices_meshed".into(), serde_json::json!(meshed
+    let meshed: Vec<serde_json::Value> = meshed
         .iter()
         .map(|&(res, elements, min, mean, hausdorff)| serde_json::json!({ "resolution": res, "elements": elements, "min_scaled_jacobian": min, "mean_scaled_jacobian": mean, "hausdorff_relative": hausdorff }))
-        .collect::<Vec<_>>()));
+        .collect();
+    if let Some(d) = best.stages.first_mut().and_then(|s| s.details.as_object_mut()) {
+        d.insert("resolutions_tried".into(), serde_json::json!(tried));
+        d.insert("lattices_meshed".into(), serde_json::json!(meshed));
     }
     best.seconds_total = t_all.elapsed().as_secs_f64();
     check_progress(progress, 1.0, "hex: done")?;
