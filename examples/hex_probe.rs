@@ -1,6 +1,7 @@
 //! Mesh one input with a fixed context under hex-option variants and print the
 //! quality of each (issue 6 experiments):
 //! `cargo run --release --example hex_probe -- MESH LABELS [release_distance ...]`
+//! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone.
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -14,6 +15,9 @@ fn main() -> sddpm::Result<()> {
         let mut opts = sddpm::hex::HexOptions::default();
         if let Ok(n) = a[2]["voxel".len()..].parse() {
             opts.voxel_resolution = n; // e.g. voxel48
+        }
+        if let Some(r) = a.get(3).and_then(|s| s.parse().ok()) {
+            opts.voxel_refinements = r; // e.g. voxel48 0: that lattice only
         }
         let t = std::time::Instant::now();
         let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut sddpm::error::NoProgress)?;

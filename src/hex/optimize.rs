@@ -655,3 +655,115 @@ pub fn mean_ratio_smooth_released(
     }
     st
 }
+
+/// Gradient, w.r.t. local node `m`, of the soft minimum (temperature 1/beta) of the
+/// nine Verdict terms of one element.
+fn element_softmin_gradient(p: &[[f64; 3]; 8], m: usize, beta: f64, buf: &mut Vec<(f64, [f64; 3])>) -> [f64; 3] {
+    buf.clear();
+    element_terms(p, m, buf);
+    let tmin = buf.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let mut g = [0.0; 3];
+    let mut ws = 0.0;
+    for (t, gt) in buf.iter() {
+        let wt = (-beta * (t - tmin)).exp();
+        ws += wt;
+        g = add(g, scale(*gt, wt));
+    }
+    if ws > 0.0 {
+        scale(g, 1.0 / ws)
+    } else {
+        g
+    }
+}
+
+/// Sum and minimum of the scaled Jacobians of the elements of v with v at x, and how
+/// many of them are inverted.
+fn local_sum(w: &Work, v: u32, x: [f64; 3]) -> (f64, f64, usize) {
+    let (mut s, mut m, mut bad) = (0.0, f64::INFINITY, 0);
+    for &e in w.n2e.of(v as usize) {
+        let q = element_sj_with(&w.mesh, e as usize, v, x);
+        s += q;
+        m = m.min(q);
+        if q <= 0.0 {
+            bad += 1;
+        }
+    }
+    (s, m, bad)
+}
+
+/// Mean ascent: Gauss-Seidel passes that move each movable node up the gradient of
+/// the sum of its elements' scaled Jacobians (soft minimum per element; boundary
+/// nodes tangentially, then back onto the surface / curve), with backtracking. A
+/// move is kept when that sum increases, no element of the node becomes inverted,
+/// and the smallest scaled Jacobian of its elements stays at least
+/// min(before, floor), so the mesh minimum never drops below min(its minimum, floor).
+/// Where the max-min optimisation has lifted the worst elements, this raises the
+/// mean, which the max-min steps and the mean-ratio energy do not aim at. The first
+/// pass visits every node, later passes the neighbourhood of nodes that moved.
+pub fn mean_ascent(w: &mut Work, sw: &Surface, passes: usize, floor: f64) -> MoveStats {
+    let mut st = MoveStats::default();
+    let n = w.mesh.nodes.len();
+    let mut buf = Vec::with_capacity(16);
+    let mut active: Vec<bool> = (0..n).map(|v| !matches!(w.role[v], Role::Corner(_))).collect();
+    for _ in 0..passes {
+        st.passes += 1;
+        let mut next = vec![false; n];
+        let mut moved = 0usize;
+        for v in 0..n {
+            if !active[v] {
+                continue;
+            }
+            let role = w.role[v];
+            let h = mean_edge(w, v);
+            if !(h > 0.0) {
+                continue;
+            }
+            let x = w.mesh.nodes[v];
+            let before = local_sum(w, v as u32, x);
+            let mut g = [0.0; 3];
+            for &e in w.n2e.of(v) {
+                let el = w.mesh.elements[e as usize];
+                let p: [[f64; 3]; 8] = std::array::from_fn(|k| w.mesh.nodes[el[k] as usize]);
+                let m = el.iter().position(|&u| u == v as u32).unwrap();
+                g = add(g, element_softmin_gradient(&p, m, 40.0, &mut buf));
+            }
+            if let Role::Free = role {
+                let t = w.attach[v];
+                let nrm = if t != u32::MAX { sw.normal(t) } else { sw.normal(sw.closest(x).1) };
+                g = sub(g, scale(nrm, dot(g, nrm)));
+            }
+            let gl = norm(g);
+            if !(gl > 1e-14) {
+                continue;
+            }
+            let dir = scale(g, 1.0 / gl);
+            let mut s = 0.1 * h;
+            for _ls in 0..6 {
+                st.moves_tried += 1;
+                let (y, t) = slide(sw, role, x, w.attach[v], scale(dir, s));
+                let after = local_sum(w, v as u32, y);
+                if after.0 > before.0 + 1e-9 && after.2 <= before.2 && after.1 >= before.1.min(floor) {
+                    w.mesh.nodes[v] = y;
+                    w.attach[v] = t;
+                    st.moves_accepted += 1;
+                    if norm(sub(y, x)) > 1e-3 * h {
+                        moved += 1;
+                        next[v] = true;
+                        for &u in w.nbr.of(v) {
+                            next[u as usize] = true;
+                        }
+                    }
+                    break;
+                }
+                s *= 0.5;
+            }
+        }
+        for v in 0..n {
+            active[v] = next[v] && !matches!(w.role[v], Role::Corner(_));
+        }
+        if moved == 0 {
+            break;
+        }
+    }
+    st
+}

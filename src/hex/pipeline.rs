@@ -725,6 +725,16 @@ pub(crate) fn finish(
         st.moves_tried += p.moves_tried + p2.moves_tried;
         st.moves_accepted += p.moves_accepted + p2.moves_accepted;
     }
+    // mean ascent: raise the mean scaled Jacobian, never below the minimum reached
+    let mut ascent = MoveStats::default();
+    let mean_before_ascent = summary(&work.mesh).mean;
+    if passes > 0 {
+        check_progress(progress, 0.9, "hex: optimisation")?;
+        let q = summary(&work.mesh);
+        if q.inverted == 0 {
+            ascent = optimize::mean_ascent(&mut work, &sw, passes, q.min);
+        }
+    }
     // where elements are still inverted, the boundary itself is folded: let the
     // boundary nodes of the bad elements (and their ring) leave the input by a little
     let mut released_nodes = 0usize;
@@ -765,7 +775,7 @@ pub(crate) fn finish(
         nodes: work.mesh.nodes.len(),
         elements: work.mesh.elements.len(),
         seconds: t0.elapsed().as_secs_f64(),
-        details: serde_json::json!({ "moves": st, "released_boundary_nodes": released_nodes }),
+        details: serde_json::json!({ "moves": st, "mean_ascent": ascent, "mean_before_ascent": mean_before_ascent, "released_boundary_nodes": released_nodes }),
     });
 
     // ---- never worse than the mapped mesh ----
