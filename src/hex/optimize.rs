@@ -767,3 +767,74 @@ pub fn mean_ascent(w: &mut Work, sw: &Surface, passes: usize, floor: f64) -> Mov
     }
     st
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hex::grid::lattice_hex;
+    use crate::hex::quality::element_qualities;
+    use crate::hex::surface::{tests::box_mesh, Features};
+    use crate::polycube::{assemble, Primitive};
+
+    /// A cube cell at level 2 (12 x 12 x 12 elements) with its interior nodes displaced
+    /// by a fixed pseudo-random field (boundary nodes held as corners).
+    fn distorted_cube() -> Work {
+        let mut l = [Primitive::Null; 12];
+        l[0] = Primitive::Cube;
+        let h = lattice_hex(&assemble(&l), 2);
+        let n = h.mesh.nodes.len();
+        let masks = crate::hex::map::normal_masks(&h);
+        let role: Vec<Role> = (0..n).map(|v| if masks[v] != 0 { Role::Corner(0) } else { Role::Interior }).collect();
+        let mut w = Work {
+            mesh: h.mesh.clone(),
+            role,
+            attach: vec![u32::MAX; n],
+            curve_nb: vec![Vec::new(); n],
+            bgraph: Default::default(),
+            nbr: Default::default(),
+            n2e: Default::default(),
+            target: vec![[1.0; 3]; h.mesh.elements.len()],
+        };
+        w.rebuild();
+        let hsz = mean_edge(&w, 0);
+        let mut s = 0x2545f4914f6cdd1du64;
+        for v in 0..n {
+            if w.role[v] == Role::Interior {
+                for a in 0..3 {
+                    s ^= s << 13;
+                    s ^= s >> 7;
+                    s ^= s << 17;
+                    w.mesh.nodes[v][a] += 0.2 * hsz * ((s % 2001) as f64 / 1000.0 - 1.0);
+                }
+            }
+        }
+        w
+    }
+
+    #[test]
+    fn mean_ascent_raises_the_mean_and_keeps_the_minimum() {
+        let mut w = distorted_cube();
+        let bb = crate::geometry::Aabb::of_points(&w.mesh.nodes);
+        let sw = Surface::new(box_mesh(bb.min, bb.max), Features::default());
+        let q0 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
+        assert_eq!(q0.inverted, 0, "{q0:?}");
+        assert!(q0.mean < 0.9, "the start should be distorted: {q0:?}");
+        let st = mean_ascent(&mut w, &sw, 30, q0.min);
+        let q1 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
+        assert!(st.moves_accepted > 0);
+        // the floor is the start minimum: no element may end below it
+        assert!(q1.min >= q0.min - 1e-12, "{q0:?} -> {q1:?}");
+        assert_eq!(q1.inverted, 0);
+        // with the boundary fixed the perfect grid (every element 1) is the maximiser
+        // and is reachable by moving one node at a time: measured 0.854 -> 0.99998
+        // (min 0.386 -> 0.99995) in 30 passes; 0.99 leaves room for the step rules
+        assert!(q1.mean > 0.99, "{q0:?} -> {q1:?}");
+        // boundary (corner) nodes did not move
+        let h = distorted_cube();
+        for v in 0..w.mesh.nodes.len() {
+            if w.role[v] != Role::Interior {
+                assert_eq!(w.mesh.nodes[v], h.mesh.nodes[v]);
+            }
+        }
+    }
+}
