@@ -725,14 +725,15 @@ pub(crate) fn finish(
         st.moves_tried += p.moves_tried + p2.moves_tried;
         st.moves_accepted += p.moves_accepted + p2.moves_accepted;
     }
-    // mean ascent: raise the mean scaled Jacobian, never below the minimum reached
+    // mean ascent of the interior nodes: raise the mean scaled Jacobian, never below
+    // the minimum reached
     let mut ascent = MoveStats::default();
     let mean_before_ascent = summary(&work.mesh).mean;
     if passes > 0 {
         check_progress(progress, 0.9, "hex: optimisation")?;
         let q = summary(&work.mesh);
         if q.inverted == 0 {
-            ascent = optimize::mean_ascent(&mut work, &sw, passes, q.min);
+            ascent = optimize::mean_ascent(&mut work, passes, q.min);
         }
     }
     // where elements are still inverted, the boundary itself is folded: let the
