@@ -153,10 +153,15 @@ fn softmin_gradient(w: &Work, v: u32, beta: f64, buf: &mut Vec<(f64, [f64; 3])>)
         let m = el.iter().position(|&x| x == v).unwrap();
         element_terms(&p, m, buf);
     }
-    let tmin = buf.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    softmin_of(buf, beta)
+}
+
+/// Gradient of the soft minimum (temperature 1/beta) of terms given with their gradients.
+fn softmin_of(terms: &[(f64, [f64; 3])], beta: f64) -> [f64; 3] {
+    let tmin = terms.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
     let mut g = [0.0; 3];
     let mut ws = 0.0;
-    for (t, gt) in buf.iter() {
+    for (t, gt) in terms.iter() {
         let wt = (-beta * (t - tmin)).exp();
         ws += wt;
         g = add(g, scale(*gt, wt));
@@ -174,6 +179,14 @@ fn mean_edge(w: &Work, v: usize) -> f64 {
         return 0.0;
     }
     nb.iter().map(|&u| norm(sub(w.mesh.nodes[u as usize], w.mesh.nodes[v]))).sum::<f64>() / nb.len() as f64
+}
+
+/// Flag node v and its edge neighbours (for the next pass of a Gauss-Seidel sweep).
+fn mark_with_neighbours(w: &Work, v: usize, flags: &mut [bool]) {
+    flags[v] = true;
+    for &u in w.nbr.of(v) {
+        flags[u as usize] = true;
+    }
 }
 
 /// Per-node report of a stage.
@@ -636,10 +649,7 @@ pub fn mean_ratio_smooth_released(
                     st.moves_accepted += 1;
                     if norm(sub(y, x)) > 1e-3 * l {
                         moved += 1;
-                        next[v] = true;
-                        for &u in w.nbr.of(v) {
-                            next[u as usize] = true;
-                        }
+                        mark_with_neighbours(w, v, &mut next);
                     }
                     break;
                 }
@@ -661,19 +671,7 @@ pub fn mean_ratio_smooth_released(
 fn element_softmin_gradient(p: &[[f64; 3]; 8], m: usize, beta: f64, buf: &mut Vec<(f64, [f64; 3])>) -> [f64; 3] {
     buf.clear();
     element_terms(p, m, buf);
-    let tmin = buf.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
-    let mut g = [0.0; 3];
-    let mut ws = 0.0;
-    for (t, gt) in buf.iter() {
-        let wt = (-beta * (t - tmin)).exp();
-        ws += wt;
-        g = add(g, scale(*gt, wt));
-    }
-    if ws > 0.0 {
-        scale(g, 1.0 / ws)
-    } else {
-        g
-    }
+    softmin_of(buf, beta)
 }
 
 /// Sum and minimum of the scaled Jacobians of the elements of v with v at x, and how
@@ -743,10 +741,7 @@ pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64) -> MoveStats {
                     st.moves_accepted += 1;
                     if norm(sub(y, x)) > 1e-3 * h {
                         moved += 1;
-                        next[v] = true;
-                        for &u in w.nbr.of(v) {
-                            next[u as usize] = true;
-                        }
+                        mark_with_neighbours(w, v, &mut next);
                     }
                     break;
                 }
@@ -775,21 +770,13 @@ mod tests {
     fn distorted_cube() -> Work {
         let mut l = [Primitive::Null; 12];
         l[0] = Primitive::Cube;
-        let h = lattice_hex(&assemble(&l), 2);
-        let n = h.mesh.nodes.len();
-        let masks = crate::hex::map::normal_masks(&h);
-        let role: Vec<Role> = (0..n).map(|v| if masks[v] != 0 { Role::Corner(0) } else { Role::Interior }).collect();
-        let mut w = Work {
-            mesh: h.mesh.clone(),
-            role,
-            attach: vec![u32::MAX; n],
-            curve_nb: vec![Vec::new(); n],
-            bgraph: Default::default(),
-            nbr: Default::default(),
-            n2e: Default::default(),
-            target: vec![[1.0; 3]; h.mesh.elements.len()],
-        };
-        w.rebuild();
+        let mut w = crate::hex::pillow::tests::work_of(&lattice_hex(&assemble(&l), 2));
+        let n = w.mesh.nodes.len();
+        for r in w.role.iter_mut() {
+            if *r != Role::Interior {
+                *r = Role::Corner(0);
+            }
+        }
         let hsz = mean_edge(&w, 0);
         let mut s = 0x2545f4914f6cdd1du64;
         for v in 0..n {

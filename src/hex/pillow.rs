@@ -174,13 +174,14 @@ pub fn pillow(w: &mut Work) -> Result<PillowReport> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::hex::grid::lattice_hex;
     use crate::hex::quality::element_qualities;
     use crate::polycube::{assemble, Primitive};
 
-    fn work_of(h: &crate::hex::grid::LatticeHex) -> Work {
+    /// The work of a lattice mesh: boundary nodes free, interior nodes interior.
+    pub(crate) fn work_of(h: &crate::hex::grid::LatticeHex) -> Work {
         let n = h.mesh.nodes.len();
         let bq = boundary_quads(&h.mesh).unwrap();
         let mut role = vec![Role::Interior; n];
