@@ -700,12 +700,16 @@ fn local_sum(w: &Work, v: u32, x: [f64; 3]) -> (f64, f64, usize) {
 /// (cgal_pinion at 48 voxels 0.862 against 0.857) but moved the boundary off sharp
 /// edges (cgal_dragknob at 42 voxels: Hausdorff 0.996 % -> 1.04 %). The first pass
 /// visits every interior node, later passes the neighbourhood of nodes that moved.
-pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64) -> MoveStats {
+/// `cancel(pass)` is asked before every pass; true stops there.
+pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64, mut cancel: impl FnMut(usize) -> bool) -> MoveStats {
     let mut st = MoveStats::default();
     let n = w.mesh.nodes.len();
     let mut buf = Vec::with_capacity(16);
     let mut active: Vec<bool> = (0..n).map(|v| w.role[v] == Role::Interior).collect();
-    for _ in 0..passes {
+    for pass in 0..passes {
+        if cancel(pass) {
+            break;
+        }
         st.passes += 1;
         let mut next = vec![false; n];
         let mut moved = 0usize;
@@ -798,7 +802,7 @@ mod tests {
         let q0 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
         assert_eq!(q0.inverted, 0, "{q0:?}");
         assert!(q0.mean < 0.9, "the start should be distorted: {q0:?}");
-        let st = mean_ascent(&mut w, 30, q0.min);
+        let st = mean_ascent(&mut w, 30, q0.min, |_| false);
         let q1 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
         assert!(st.moves_accepted > 0);
         // the floor is the start minimum: no element may end below it

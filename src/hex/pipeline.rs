@@ -728,12 +728,19 @@ pub(crate) fn finish(
     // mean ascent of the interior nodes: raise the mean scaled Jacobian, never below
     // the minimum reached
     let mut ascent = MoveStats::default();
-    let mean_before_ascent = summary(&work.mesh).mean;
-    if passes > 0 {
+    let q = summary(&work.mesh);
+    let mean_before_ascent = q.mean;
+    if passes > 0 && q.inverted == 0 {
         check_progress(progress, 0.9, "hex: optimisation")?;
-        let q = summary(&work.mesh);
-        if q.inverted == 0 {
-            ascent = optimize::mean_ascent(&mut work, passes, q.min);
+        ascent = optimize::mean_ascent(&mut work, passes, q.min, |p| {
+            let ok = progress.report(0.9 + 0.05 * p as f64 / passes as f64, "hex: optimisation");
+            if !ok {
+                cancelled = true;
+            }
+            !ok
+        });
+        if cancelled {
+            return Err(Error::Cancelled("hex: optimisation".into()));
         }
     }
     // where elements are still inverted, the boundary itself is folded: let the
