@@ -619,6 +619,18 @@ pub(crate) fn working_frames(surface: &TriMesh, to_user: &Affine, opts: &HexOpti
     Ok((Frames { sw, to_w, w_to_u, mirror, sw_scale, diag_w }, mesh_n))
 }
 
+/// The per-pass callback of an optimisation loop: reports progress from `lo` over
+/// `span` of the range and records a cancel in `cancelled` (true stops the loop).
+fn pass_reporter<'a, P: Progress + ?Sized>(progress: &'a mut P, lo: f64, span: f64, passes: usize, cancelled: &'a mut bool) -> impl FnMut(usize) -> bool + 'a {
+    move |p| {
+        let ok = progress.report(lo + span * p as f64 / passes.max(1) as f64, "hex: optimisation");
+        if !ok {
+            *cancelled = true;
+        }
+        !ok
+    }
+}
+
 /// The quality steps and the result, from the mapped mesh of the chosen level:
 /// pillowing, smoothing, optimisation, the release of folded boundary nodes, the
 /// Hausdorff distance, and the mesh back in user coordinates.
@@ -705,13 +717,7 @@ pub(crate) fn finish(
     let before = summary(&work.mesh);
     let passes = opts.optimise_passes;
     let mut cancelled = false;
-    let mut st = optimize::optimise(&mut work, &sw, opts.optimise_target, passes, |p| {
-        let ok = progress.report(0.65 + 0.2 * p as f64 / passes.max(1) as f64, "hex: optimisation");
-        if !ok {
-            cancelled = true;
-        }
-        !ok
-    });
+    let mut st = optimize::optimise(&mut work, &sw, opts.optimise_target, passes, pass_reporter(progress, 0.65, 0.2, passes, &mut cancelled));
     if cancelled {
         return Err(Error::Cancelled("hex: optimisation".into()));
     }
@@ -732,25 +738,20 @@ pub(crate) fn finish(
     let mean_before_ascent = q.mean;
     if passes > 0 && q.inverted == 0 {
         check_progress(progress, 0.9, "hex: optimisation")?;
-        ascent = optimize::mean_ascent(&mut work, passes, q.min, |p| {
-            let ok = progress.report(0.9 + 0.05 * p as f64 / passes as f64, "hex: optimisation");
-            if !ok {
-                cancelled = true;
-            }
-            !ok
-        });
+        ascent = optimize::mean_ascent(&mut work, passes, q.min, pass_reporter(progress, 0.9, 0.05, passes, &mut cancelled));
         if cancelled {
             return Err(Error::Cancelled("hex: optimisation".into()));
         }
     }
     // where elements are still inverted, the boundary itself is folded: let the
     // boundary nodes of the bad elements (and their ring) leave the input by a little
+    // (mean ascent runs only without them and cannot invert one: `q` still counts them)
     let mut released_nodes = 0usize;
-    if opts.release_distance > 0.0 && summary(&work.mesh).inverted > 0 {
-        let q = element_qualities(&work.mesh);
+    if opts.release_distance > 0.0 && q.inverted > 0 {
+        let sj = element_qualities(&work.mesh);
         let mut rel = vec![false; work.mesh.nodes.len()];
         for (e, el) in work.mesh.elements.iter().enumerate() {
-            if q[e] <= 0.05 || q[e] == super::quality::DEGENERATE {
+            if sj[e] <= 0.05 || sj[e] == super::quality::DEGENERATE {
                 for &v in el {
                     rel[v as usize] = true;
                     for &u in work.nbr.of(v as usize) {
@@ -765,7 +766,7 @@ pub(crate) fn finish(
         released_nodes = rel.iter().filter(|&&b| b).count();
         let leave = opts.release_distance * diag_w;
         let keep = (work.mesh.nodes.clone(), work.attach.clone());
-        let q0 = summary(&work.mesh);
+        let q0 = q;
         optimize::mean_ratio_smooth_released(&mut work, &sw, opts.smooth_iterations, None, |_| true, &rel, leave);
         optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
         let q1 = summary(&work.mesh);
