@@ -384,7 +384,14 @@ pub fn generate_auto(
                 if ctx.occupied().next().is_none() {
                     continue;
                 }
-                let v = ctx.validity();
+                let g = ctx.assemble();
+                // a valid solid's genus is 1 - its Euler characteristic: an assembly
+                // that says another genus needs no full check (most of a box's
+                // products; the check was a third of a genus-1 part's search)
+                if 1 - crate::polycube::assembly::euler_solid(&g) != input_genus {
+                    continue;
+                }
+                let v = crate::polycube::assembly::check(&g);
                 if v.valid && v.genus == Some(input_genus) {
                     cands.push((ctx, 0.0));
                 }

@@ -306,7 +306,7 @@ impl Denoiser {
         // A gate fixed at 1 is the estimate alone: the U-Net's output would be
         // multiplied by zero, so it is not computed.
         if let Some(k) = self.kernel.as_ref().filter(|k| k.gate_override == Some(1.0)) {
-            return k.estimate(x, t, prior_tensor(ctx, &device)).1;
+            return k.estimate_eps_direct(x, t, ctx);
         }
         let temb = Tensor::<2>::from_data(TensorData::new(timestep_encoding(t, self.time_dim), [b, self.time_dim]), &device);
         let temb = self.time2.forward(silu(self.time1.forward(temb)));
@@ -455,6 +455,98 @@ impl KernelHead {
         let x0 = pbar.clone() + (y.clone() - pbar * sa.clone()) * (sa.clone() * var_data / v);
         let eps = (y - x0.clone() * sa) / sd;
         (from_cells(x0, b), from_cells(eps, b))
+    }
+}
+
+impl KernelHead {
+    /// The noise of [`KernelHead::estimate`] computed per cell on the CPU, for the
+    /// estimate alone (gate 1, the sampler's default). The same formula, but a cell
+    /// whose prior is all zero (null or withheld) needs no attention (its prior mean
+    /// is zero whatever the weights), and weights below e^-88 of the largest (which
+    /// f32 rounds to zero or a denormal) are not evaluated: the dense version spent
+    /// the reverse process on 12 x 512 x 512 attention weights per candidate and
+    /// step, most of them for empty cells or underflowing (BENCHMARKS.md "Context
+    /// search": speed). Agrees with the tensor version to f32 rounding (test
+    /// `direct_estimate_matches_the_tensor_one`).
+    fn estimate_eps_direct(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Tensor<4> {
+        use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL, TENSOR_LEN};
+        use rayon::prelude::*;
+        assert!(!self.coef.is_empty(), "template attention used before Denoiser::with_schedule");
+        let device = x.device();
+        let b = t.len();
+        let scalar = |v: Tensor<1>| v.into_data().convert::<f32>().try_into_vec::<f32>().ok().and_then(|v| v.first().copied()).unwrap_or(f32::NAN);
+        let var_data = (2.0 * scalar(self.log_sigma.val())).exp();
+        let inv_rho2 = (-2.0 * scalar(self.log_rho.val())).exp();
+        let xs: Vec<f32> = x.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
+        let oh: Vec<f32> = ctx.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
+        let priors: Vec<Vec<f32>> = oh.chunks(CONTEXT_DIM).map(prior_image).collect();
+        assert_eq!(xs.len(), b * TENSOR_LEN);
+        let np = POINTS_PER_CELL;
+        let blocks: Vec<Vec<f32>> = (0..b * NUM_CELLS)
+            .into_par_iter()
+            .map(|job| {
+                let (bi, n) = (job / NUM_CELLS, job % NUM_CELLS);
+                let c = self.coef[t[bi].min(self.coef.len() - 1)];
+                let (sa, sd) = (c[0], c[1]);
+                let v = sa * sa * var_data + sd * sd;
+                let keep = sa * var_data / v;
+                let (xb, pb) = (&xs[bi * TENSOR_LEN..(bi + 1) * TENSOR_LEN], &priors[bi]);
+                let at = |img: &[f32], p: usize| -> [f32; 3] {
+                    let (r, col) = slot(n, p);
+                    std::array::from_fn(|ch| img[flat(ch, r, col)])
+                };
+                let pts: Vec<[f32; 3]> = (0..np).map(|j| at(pb, j)).collect();
+                let empty = pts.iter().all(|p| p.iter().all(|&v| v == 0.0));
+                // logit_ij = y_i . a_j + c_j - (i - j)^2 / (2 rho^2)
+                let a: Vec<[f32; 3]> = pts.iter().map(|p| p.map(|q| q * sa / v)).collect();
+                let cj: Vec<f32> = pts.iter().map(|p| -0.5 * sa * sa * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) / v).collect();
+                let mut out = vec![0f32; 3 * np];
+                let mut logit = vec![0f32; np];
+                for i in 0..np {
+                    let xi = at(xb, i);
+                    let y: [f32; 3] = std::array::from_fn(|ch| xi[ch] - c[2 + ch]);
+                    let pbar = if empty {
+                        [0.0; 3]
+                    } else {
+                        let mut m = f32::NEG_INFINITY;
+                        for j in 0..np {
+                            let d = i as f32 - j as f32;
+                            let l = y[0] * a[j][0] + y[1] * a[j][1] + y[2] * a[j][2] + cj[j] - 0.5 * d * d * inv_rho2;
+                            logit[j] = l;
+                            m = m.max(l);
+                        }
+                        let (mut sw, mut acc) = (0f32, [0f32; 3]);
+                        for j in 0..np {
+                            let e = logit[j] - m;
+                            if e > -88.0 {
+                                let w = e.exp();
+                                sw += w;
+                                for ch in 0..3 {
+                                    acc[ch] += w * pts[j][ch];
+                                }
+                            }
+                        }
+                        acc.map(|v| v / sw)
+                    };
+                    for ch in 0..3 {
+                        let x0 = pbar[ch] + (y[ch] - pbar[ch] * sa) * keep;
+                        out[ch * np + i] = (y[ch] - x0 * sa) / sd;
+                    }
+                }
+                out
+            })
+            .collect();
+        let mut eps = vec![0f32; b * TENSOR_LEN];
+        for (job, blk) in blocks.iter().enumerate() {
+            let (bi, n) = (job / NUM_CELLS, job % NUM_CELLS);
+            for p in 0..np {
+                let (r, col) = slot(n, p);
+                for ch in 0..3 {
+                    eps[bi * TENSOR_LEN + flat(ch, r, col)] = blk[ch * np + p];
+                }
+            }
+        }
+        Tensor::<4>::from_data(TensorData::new(eps, [b, 3, TENSOR_H, TENSOR_W]), &device)
     }
 }
 

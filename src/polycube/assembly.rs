@@ -231,34 +231,18 @@ pub fn check(g: &VoxelGrid) -> Validity {
     for pz in 0..=nz as i64 {
         for py in 0..=ny as i64 {
             for px in 0..=nx as i64 {
-                let mut oct = [false; 8];
-                let mut cnt = 0;
-                for (o, slot) in oct.iter_mut().enumerate() {
-                    let (dx, dy, dz) = ((o & 1) as i64, ((o >> 1) & 1) as i64, ((o >> 2) & 1) as i64);
-                    *slot = g.at(px - 1 + dx, py - 1 + dy, pz - 1 + dz);
-                    cnt += *slot as usize;
-                }
-                if cnt == 0 || cnt == 8 {
+                let pattern = octant_pattern(g, px, py, pz);
+                // a pinch not already explained by an edge contact
+                if !vertex_tables().pinched[pattern as usize] {
                     continue;
                 }
-                if !octants_connected(&oct, true) || !octants_connected(&oct, false) {
-                    // Only count pinches not already explained by an edge contact.
-                    if !block_has_edge_diagonal(&oct) {
-                        v.vertex_contacts += 1;
-                        if first_vertex.is_none() {
-                            let vs: Vec<[usize; 3]> = (0..8)
-                                .filter(|&o| oct[o])
-                                .map(|o| {
-                                    [
-                                        (px - 1 + (o & 1) as i64) as usize,
-                                        (py - 1 + ((o >> 1) & 1) as i64) as usize,
-                                        (pz - 1 + ((o >> 2) & 1) as i64) as usize,
-                                    ]
-                                })
-                                .collect();
-                            first_vertex = Some(vs);
-                        }
-                    }
+                v.vertex_contacts += 1;
+                if first_vertex.is_none() {
+                    let vs: Vec<[usize; 3]> = (0..8i64)
+                        .filter(|&o| pattern >> o & 1 == 1)
+                        .map(|o| [(px - 1 + (o & 1)) as usize, (py - 1 + ((o >> 1) & 1)) as usize, (pz - 1 + ((o >> 2) & 1)) as usize])
+                        .collect();
+                    first_vertex = Some(vs);
                 }
             }
         }
@@ -348,6 +332,81 @@ pub fn check(g: &VoxelGrid) -> Validity {
         v.reason = Some(reasons.join("; "));
     }
     v
+}
+
+/// The 2x2x2 block of voxels around lattice point (px, py, pz) as 8 bits (bit o =
+/// octant o, o's bit 0 = x, 1 = y, 2 = z; voxel (px - 1 + dx, ...)).
+fn octant_pattern(g: &VoxelGrid, px: i64, py: i64, pz: i64) -> u8 {
+    let mut pattern = 0u8;
+    for o in 0..8 {
+        if g.at(px - 1 + (o & 1), py - 1 + ((o >> 1) & 1), pz - 1 + ((o >> 2) & 1)) {
+            pattern |= 1 << o;
+        }
+    }
+    pattern
+}
+
+/// Per 2x2x2 octant pattern: whether the lattice point is a pinch [`check`] counts
+/// (solid or empty octants not face-connected, not explained by an edge contact),
+/// and 8 x its share of the Euler characteristic of the solid (see [`euler_solid`]).
+struct VertexTables {
+    pinched: [bool; 256],
+    euler8: [i8; 256],
+}
+
+fn vertex_tables() -> &'static VertexTables {
+    static T: std::sync::OnceLock<VertexTables> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        let mut t = VertexTables { pinched: [false; 256], euler8: [0; 256] };
+        for p in 0..256usize {
+            let oct: [bool; 8] = std::array::from_fn(|o| p >> o & 1 == 1);
+            let any = |f: &dyn Fn(usize) -> bool| (0..8).any(|o| oct[o] && f(o));
+            t.pinched[p] = p != 0 && p != 255 && (!octants_connected(&oct, true) || !octants_connected(&oct, false)) && !block_has_edge_diagonal(&oct);
+            // the point itself (1), its 6 half-edges (-1/2 each, an edge along `ax`
+            // towards side `s` touches the 4 octants with bit ax = s), its 12 quarter
+            // faces (+1/4 each, the face normal to `ax` in quadrant (su, sw) touches the
+            // 2 octants with those bits), its 8 eighth voxels (-1/8 each); each counted
+            // when one of the cells it touches is solid
+            let mut e = if p != 0 { 8 } else { 0 };
+            for ax in 0..3 {
+                for s in 0..2 {
+                    if any(&|o| o >> ax & 1 == s) {
+                        e -= 4;
+                    }
+                }
+                let (u, w) = ((ax + 1) % 3, (ax + 2) % 3);
+                for su in 0..2 {
+                    for sw in 0..2 {
+                        if any(&|o| o >> u & 1 == su && o >> w & 1 == sw) {
+                            e += 2;
+                        }
+                    }
+                }
+            }
+            e -= p.count_ones() as i32;
+            t.euler8[p] = e as i8;
+        }
+        t
+    })
+}
+
+/// Euler characteristic of the solid (the union of the closed voxels), summed from
+/// each lattice point's 2x2x2 pattern. For a valid solid (one component, no cavity,
+/// manifold boundary: a handlebody) it is 1 - genus, so a set whose value says
+/// another genus can be passed over without the full [`check`].
+pub fn euler_solid(g: &VoxelGrid) -> i64 {
+    let [nx, ny, nz] = g.dims.map(|d| d as i64);
+    let t = vertex_tables();
+    let mut sum = 0i64;
+    for pz in 0..=nz {
+        for py in 0..=ny {
+            for px in 0..=nx {
+                sum += t.euler8[octant_pattern(g, px, py, pz) as usize] as i64;
+            }
+        }
+    }
+    debug_assert_eq!(sum % 8, 0);
+    sum / 8
 }
 
 /// Octants of a 2x2x2 block (bit 0 = x, 1 = y, 2 = z) of the given value: are they face-connected?
@@ -590,6 +649,50 @@ pub fn grid_extent() -> [f64; 3] {
 mod tests {
     use super::*;
     use Primitive::*;
+
+    #[test]
+    fn the_tables_agree_with_the_direct_counts_on_random_assemblies() {
+        // Euler characteristic from the lattice-point table against V - E + F - C
+        // counted directly, and 1 - chi against the genus of every valid assembly
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let all: Vec<Primitive> = (0..11u8).filter_map(Primitive::from_label).filter(|p| *p != Null).collect();
+        let (mut valid, mut genera) = (0, std::collections::BTreeSet::new());
+        for _ in 0..3000 {
+            let mut l = [Null; NUM_CELLS];
+            for c in l.iter_mut() {
+                if rng.random::<f64>() < 0.6 {
+                    *c = all[rng.random_range(0..all.len())];
+                }
+            }
+            let g = assemble(&l);
+            let chi = euler_solid(&g);
+            // direct count: solid cells of each dimension in the closed union
+            let at = |x: i64, y: i64, z: i64| g.at(x, y, z);
+            let [nx, ny, nz] = g.dims.map(|d| d as i64);
+            let (mut cv, mut ce, mut cf, mut cc) = (0i64, 0i64, 0i64, 0i64);
+            for z in 0..=nz {
+                for y in 0..=ny {
+                    for x in 0..=nx {
+                        // voxels touching vertex, edges along a, faces normal to a, voxel
+                        let near = |dx: &[i64], dy: &[i64], dz: &[i64]| dx.iter().any(|&i| dy.iter().any(|&j| dz.iter().any(|&k| at(x + i, y + j, z + k))));
+                        cv += near(&[-1, 0], &[-1, 0], &[-1, 0]) as i64;
+                        ce += near(&[0], &[-1, 0], &[-1, 0]) as i64 + near(&[-1, 0], &[0], &[-1, 0]) as i64 + near(&[-1, 0], &[-1, 0], &[0]) as i64;
+                        cf += near(&[-1, 0], &[0], &[0]) as i64 + near(&[0], &[-1, 0], &[0]) as i64 + near(&[0], &[0], &[-1, 0]) as i64;
+                        cc += at(x, y, z) as i64;
+                    }
+                }
+            }
+            assert_eq!(chi, cv - ce + cf - cc, "{l:?}");
+            let v = check(&g);
+            if v.valid {
+                valid += 1;
+                genera.insert(v.genus.unwrap());
+                assert_eq!(v.genus, Some(1 - chi), "{l:?}");
+            }
+        }
+        assert!(valid > 100 && genera.len() >= 3, "{valid} valid, genera {genera:?}");
+    }
 
     fn labels(pairs: &[(usize, Primitive)]) -> [Primitive; NUM_CELLS] {
         let mut l = [Null; NUM_CELLS];
