@@ -133,6 +133,10 @@ fn main() -> sddpm::Result<()> {
     if let Some(t) = std::env::var("RECOVERY_TAU_CD").ok().and_then(|s| s.parse().ok()) {
         popts.verify.tau_cd = t;
     }
+    // RECOVERY_STEPS=n: the sampler's strided steps (SamplerOptions::steps) for this run
+    if let Some(n) = std::env::var("RECOVERY_STEPS").ok().and_then(|s| s.parse().ok()) {
+        popts.sampler.steps = n;
+    }
     let mut aopts = AutoOptions::default();
     // RECOVERY_JOINT=1: AutoOptions::joint_labels on
     aopts.joint_labels = std::env::var_os("RECOVERY_JOINT").is_some();
