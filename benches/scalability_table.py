@@ -3,7 +3,9 @@
 by the input's genus, from the report.json files `bash benches/run_main_job.sh OUT`
 wrote ("diffused" from report.json, or, for runs before that field, from the
 candidates.json of `sddpm polycube MESH -o POLYCUBE_OUT/NAME` with the same options).
-Usage: python3 benches/scalability_table.py OUT [POLYCUBE_OUT]"""
+Usage: python3 benches/scalability_table.py OUT [POLYCUBE_OUT]; OUT may also be a
+folder of `bash benches/run_polycube_all.sh` (the polycube stage alone, its own
+times)."""
 import json, os, sys
 
 out = sys.argv[1] if len(sys.argv) > 1 else "build/runs"
@@ -15,6 +17,9 @@ for n in sorted(os.listdir(out)):
         continue
     d = json.load(open(p))
     pc, a = d["polycube"], d["polycube"].get("auto") or {}
+    cjp = os.path.join(out, n, "candidates.json")
+    if not a and os.path.exists(cjp):  # a `sddpm polycube` folder: the search is in candidates.json
+        a = json.load(open(cjp)).get("auto") or {}
     boxes = a.get("boxes", [])
     cands = pc.get("candidates", [])
     ver = pc.get("verified")
@@ -24,7 +29,7 @@ for n in sorted(os.listdir(out)):
         kept = sum(1 for c in cj["candidates"] if c["stage"] in ("gocc", "tcv", "verified"))
     rows.append(dict(name=n, g=d["input"]["genus"], tris=d["input"]["triangles"], tets=a.get("volume_tetrahedra", 0),
                      boxes=sum(1 for b in boxes if b.get("candidates", 0) > 0), gc=sum(b.get("candidates", 0) for b in boxes),
-                     kept=kept, ver=ver, s=d["seconds"]["polycube"]))
+                     kept=kept, ver=ver, s=sec if not isinstance(sec := d["seconds"]["polycube"], dict) else sec["total"]))
 rows.sort(key=lambda r: (r["g"] > 1, r["g"] > 2, -(r["ver"] > 0), r["s"]))
 print("| class | mesh | genus | triangles | temporary volume (tets) | boxes with candidates | genus-consistent global candidates | diffused in the global stage | verified | polycube s |")
 print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")

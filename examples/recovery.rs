@@ -140,6 +140,13 @@ fn main() -> sddpm::Result<()> {
     let mut aopts = AutoOptions::default();
     // RECOVERY_JOINT=1: AutoOptions::joint_labels on
     aopts.joint_labels = std::env::var_os("RECOVERY_JOINT").is_some();
+    // RECOVERY_MAX_GLOBAL=n, RECOVERY_MAX_BOXES=n: AutoOptions::max_global / max_boxes
+    if let Some(n) = std::env::var("RECOVERY_MAX_GLOBAL").ok().and_then(|s| s.parse().ok()) {
+        aopts.max_global = n;
+    }
+    if let Some(n) = std::env::var("RECOVERY_MAX_BOXES").ok().and_then(|s| s.parse().ok()) {
+        aopts.max_boxes = n;
+    }
     let mut csv = String::from("group,case,context,cells,genus,auto_verified,auto_recovered,auto_placed,hausdorff_cells,true_among_verified,true_among_candidates,global_candidates,kept,verified,auto_s,user_verified,user_stage,user_s,chosen\n");
     let mut summary = Vec::new();
     for (gi, &(name, lo, hi)) in GROUPS.iter().enumerate() {
