@@ -41,6 +41,12 @@ pub struct EvalArgs {
     /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
     #[arg(long, allow_negative_numbers = true)]
     pub kernel_gate: Option<f64>,
+    /// Denoising passes after sampling (SamplerOptions::refine_passes).
+    #[arg(long)]
+    pub refine_passes: Option<usize>,
+    /// Timestep of those passes (SamplerOptions::refine_t).
+    #[arg(long)]
+    pub refine_t: Option<usize>,
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
     pub sweep: bool,
@@ -63,6 +69,12 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     }
     if let Some(g) = a.kernel_gate {
         opts.sampler.kernel_gate = super::polycube::kernel_gate_arg(g);
+    }
+    if let Some(n) = a.refine_passes {
+        opts.sampler.refine_passes = n;
+    }
+    if let Some(t) = a.refine_t {
+        opts.sampler.refine_t = t;
     }
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
