@@ -465,9 +465,9 @@ impl KernelHead {
     /// is zero whatever the weights), and weights below e^-88 of the largest (which
     /// f32 rounds to zero or a denormal) are not evaluated: the dense version spent
     /// the reverse process on 12 x 512 x 512 attention weights per candidate and
-    /// step, most of them for empty cells or underflowing (BENCHMARKS.md "Context
-    /// search": speed). Agrees with the tensor version to f32 rounding (test
-    /// `direct_estimate_matches_the_tensor_one`).
+    /// step, most of them for empty cells or underflowing (BENCHMARKS.md "Search
+    /// speed"). Agrees with the tensor version to f32 rounding (checked in the test
+    /// `template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing`).
     fn estimate_eps_direct(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Tensor<4> {
         use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL, TENSOR_LEN};
         use rayon::prelude::*;
@@ -496,7 +496,7 @@ impl KernelHead {
                     std::array::from_fn(|ch| img[flat(ch, r, col)])
                 };
                 let pts: Vec<[f32; 3]> = (0..np).map(|j| at(pb, j)).collect();
-                let empty = pts.iter().all(|p| p.iter().all(|&v| v == 0.0));
+                let empty = pts.iter().all(|p| p.iter().all(|&q| q == 0.0));
                 // logit_ij = y_i . a_j + c_j - (i - j)^2 / (2 rho^2)
                 let a: Vec<[f32; 3]> = pts.iter().map(|p| p.map(|q| q * sa / v)).collect();
                 let cj: Vec<f32> = pts.iter().map(|p| -0.5 * sa * sa * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) / v).collect();
@@ -526,7 +526,7 @@ impl KernelHead {
                                 }
                             }
                         }
-                        acc.map(|v| v / sw)
+                        acc.map(|q| q / sw)
                     };
                     for ch in 0..3 {
                         let x0 = pbar[ch] + (y[ch] - pbar[ch] * sa) * keep;
