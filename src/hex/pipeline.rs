@@ -766,11 +766,10 @@ pub(crate) fn finish(
         released_nodes = rel.iter().filter(|&&b| b).count();
         let leave = opts.release_distance * diag_w;
         let keep = (work.mesh.nodes.clone(), work.attach.clone());
-        let q0 = q;
         optimize::mean_ratio_smooth_released(&mut work, &sw, opts.smooth_iterations, None, |_| true, &rel, leave);
         optimize::optimise(&mut work, &sw, opts.optimise_target, passes / 2, |_| false);
         let q1 = summary(&work.mesh);
-        if (q1.inverted, -q1.min) > (q0.inverted, -q0.min) {
+        if (q1.inverted, -q1.min) > (q.inverted, -q.min) {
             work.mesh.nodes = keep.0;
             work.attach = keep.1;
             released_nodes = 0;
