@@ -275,6 +275,9 @@ typedef struct sddpm_polycube_options {
   double max_fit;
   // Automated mode: voxels along the longest edge of the temporary volume (default 48).
   uint32_t auto_resolution;
+  // User-guided pre-check: refuse a context when relabelling one of its cells fits
+  // the input this many times better (default 1.5; 0 turns the test off).
+  double neighbour_fit_ratio;
 } sddpm_polycube_options;
 
 // What the verification measured for one candidate.

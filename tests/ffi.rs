@@ -308,6 +308,40 @@ unsafe fn polycube_report(model: *const SddpmModel, mesh: *const SddpmMesh, ctx:
     j.to_string()
 }
 
+/// The C options carry the core's defaults; a negative or NaN neighbour ratio is
+/// refused before any work, and 0 (the test off) is accepted.
+#[test]
+fn polycube_options_default_and_a_bad_neighbour_ratio() {
+    unsafe {
+        let mut o = std::mem::zeroed::<SddpmPolycubeOptions>();
+        assert_eq!(sddpm_polycube_options_default(&mut o), Status::Ok);
+        let core = sddpm::context::generate::PolycubeOptions::default();
+        assert_eq!(o.neighbour_fit_ratio, core.neighbour_fit_ratio);
+        assert_eq!(o.max_fit, core.max_fit);
+        let mut model = null_mut();
+        assert_eq!(sddpm_model_new_default(&mut model), Status::Ok);
+        let mut mesh = null_mut();
+        assert_eq!(sddpm_mesh_load(data("cgal_hole.off").as_ptr(), null(), &mut mesh), Status::Ok);
+        let mut ctx = null_mut();
+        let s = CString::new("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+        assert_eq!(sddpm_context_new_from_string(s.as_ptr(), &mut ctx), Status::Ok);
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            o.neighbour_fit_ratio = bad;
+            let mut p = null_mut();
+            assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), &o, None, null_mut(), &mut p), Status::InvalidArgument);
+            assert!(p.is_null());
+            assert!(last_message().contains("neighbour_fit_ratio"), "{}", last_message());
+        }
+        o.neighbour_fit_ratio = 0.0;
+        let mut p = null_mut();
+        assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), &o, None, null_mut(), &mut p), Status::Ok, "{}", last_message());
+        sddpm_polycube_free(p);
+        sddpm_context_free(ctx);
+        sddpm_mesh_free(mesh);
+        sddpm_model_free(model);
+    }
+}
+
 /// One model handle, one mesh handle and one context handle shared by four threads
 /// running polycube generation at once through the C ABI: every report equals the
 /// sequential run's with the same seed (the handles are documented as usable from

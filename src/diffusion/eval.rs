@@ -40,8 +40,13 @@ pub struct EvalSummary {
     /// Wrong-context trials and how many were rejected.
     pub wrong_trials: usize,
     pub wrong_rejected: usize,
-    /// Rejections of wrong contexts by the pre-check (occupancy or fit) alone.
+    /// Rejections of wrong contexts by the pre-check (occupancy, fit or the
+    /// neighbour test) alone.
     pub wrong_rejected_precheck: usize,
+    /// Of those, by the neighbour test (a one-cell alternative fits far better).
+    pub wrong_rejected_neighbour: usize,
+    /// True contexts the neighbour test refused.
+    pub true_rejected_neighbour: usize,
     /// Geometric fit of the true context (squared cell units), per case.
     pub true_fit: Vec<f64>,
     /// Geometric fit of the wrong context, per trial.
@@ -80,6 +85,9 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
         let c: &Candidate = &r.candidates[0];
         s.true_fit.push(c.fit);
+        if c.refusal.is_some() {
+            s.true_rejected_neighbour += 1;
+        }
         if c.stage != Stage::Occupancy {
             s.precheck_passed += 1;
         }
@@ -126,6 +134,9 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
                 }
                 if r.candidates[0].stage == Stage::Occupancy {
                     s.wrong_rejected_precheck += 1;
+                }
+                if r.candidates[0].refusal.is_some() {
+                    s.wrong_rejected_neighbour += 1;
                 }
             }
         }

@@ -215,7 +215,7 @@ th{background:#f2f2f2}.pics img{border:1px solid #ddd;margin:4px;max-width:32%}.
         let cls = if stage == "verified" { "ok" } else { "bad" };
         let (pcd, reason) = match &c.report {
             Some(rep) => (format!("{:.4}", rep.mean_target_pcd), rep.reason.clone().unwrap_or_default()),
-            None => ("-".into(), String::new()),
+            None => ("-".into(), c.refusal.clone().unwrap_or_default()),
         };
         let chosen = if i == r.candidate { " (meshed)" } else { "" };
         let _ = write!(

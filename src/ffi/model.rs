@@ -133,6 +133,9 @@ pub struct SddpmPolycubeOptions {
     pub max_fit: f64,
     /// Automated mode: voxels along the longest edge of the temporary volume (default 48).
     pub auto_resolution: u32,
+    /// User-guided pre-check: refuse a context when relabelling one of its cells fits
+    /// the input this many times better (default 1.5; 0 turns the test off).
+    pub neighbour_fit_ratio: f64,
 }
 
 /// Fill `out` with the default polycube options.
@@ -152,6 +155,7 @@ pub unsafe extern "C" fn sddpm_polycube_options_default(out: *mut SddpmPolycubeO
             max_in_empty_fraction: p.max_in_empty_fraction,
             max_fit: p.max_fit,
             auto_resolution: AutoOptions::default().resolution as u32,
+            neighbour_fit_ratio: p.neighbour_fit_ratio,
         };
         Ok(())
     }
@@ -163,6 +167,9 @@ fn options(o: Option<&SddpmPolycubeOptions>) -> Result<(PolycubeOptions, AutoOpt
     if let Some(o) = o {
         if !(o.tau_cd > 0.0 && o.tau_cd.is_finite()) || !(0.0..=1.0).contains(&o.max_in_empty_fraction) || !(o.max_fit > 0.0) {
             return Err(Error::InvalidArgument("polycube options: tau_cd and max_fit must be positive, max_in_empty_fraction in [0, 1]".into()));
+        }
+        if !(o.neighbour_fit_ratio >= 0.0 && o.neighbour_fit_ratio.is_finite()) {
+            return Err(Error::InvalidArgument(format!("polycube options: neighbour_fit_ratio {} must be finite and >= 0 (0 turns the test off)", o.neighbour_fit_ratio)));
         }
         p.seed = o.seed;
         p.sampler.seed = o.seed;
@@ -177,6 +184,7 @@ fn options(o: Option<&SddpmPolycubeOptions>) -> Result<(PolycubeOptions, AutoOpt
         p.max_in_empty_fraction = o.max_in_empty_fraction;
         p.max_fit = o.max_fit;
         a.resolution = (o.auto_resolution as usize).clamp(8, 256);
+        p.neighbour_fit_ratio = o.neighbour_fit_ratio;
     }
     Ok((p, a))
 }

@@ -98,7 +98,8 @@ class ModelInfo(C.Structure):
 
 class PolycubeOptions(C.Structure):
     _fields_ = [("seed", C.c_uint64), ("sampler_steps", C.c_uint32), ("orientations", C.c_uint32), ("tau_cd", C.c_double),
-                ("max_in_empty_fraction", C.c_double), ("max_fit", C.c_double), ("auto_resolution", C.c_uint32)]
+                ("max_in_empty_fraction", C.c_double), ("max_fit", C.c_double), ("auto_resolution", C.c_uint32),
+                ("neighbour_fit_ratio", C.c_double)]
 
 
 class Constraints(C.Structure):
