@@ -8,7 +8,8 @@
 //!    tolerance around) their own cell, and the regions of null cells must stay
 //!    nearly empty.
 //! 2. TCV (template-based consistency verification), per active cell: centre the
-//!    cell's points and every template; penalty Chamfer distance
+//!    cell's points and every template (on the midpoint of the bounding box, see
+//!    `centre`); penalty Chamfer distance
 //!    PCD(X, Y) = 1/2 (mean_x f(min_y |x-y|^2) + mean_y f(min_x |x-y|^2)),
 //!    f(d) = d if d <= tau_CD else d (1 + (d / tau_CD)^p); accept iff the target
 //!    template is the nearest of all ten and d_target <= tau_CD.
@@ -126,18 +127,28 @@ pub fn cached_templates(n: usize) -> std::sync::Arc<Vec<Vec<[f64; 3]>>> {
     t
 }
 
+/// Centre a point set on the midpoint of its bounding box (the cell's own centre for
+/// a cell's surface, whichever part of it carries more points). The centroid was
+/// used before: it moves with the density of the points (a warped input puts more
+/// samples on one side) and with the shape itself (a blind hole's bottom pulls a BHC
+/// template's centroid off the cell centre), and the small misalignment that leaves
+/// decides between a through and a blind hole along the same axis, whose PCDs differ
+/// by a few per cent. Measured on 256 held-in cases (BENCHMARKS.md, "TCV centring"):
+/// true contexts passing TCV 239 -> 249.
 fn centre(pts: &[[f64; 3]]) -> Vec<[f64; 3]> {
     if pts.is_empty() {
         return Vec::new();
     }
-    let mut c = [0.0; 3];
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
     for p in pts {
         for a in 0..3 {
-            c[a] += p[a];
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
         }
     }
-    let n = pts.len() as f64;
-    pts.iter().map(|p| [p[0] - c[0] / n, p[1] - c[1] / n, p[2] - c[2] / n]).collect()
+    let m: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a] + hi[a]));
+    pts.iter().map(|p| [p[0] - m[0], p[1] - m[1], p[2] - m[2]]).collect()
 }
 
 fn penalty(d: f64, tau: f64, p: f64) -> f64 {
