@@ -522,9 +522,9 @@ pub fn refuse_worse_than_neighbours(input: &PreparedInput, cands: &mut [Candidat
         if c.fit > ratio * f {
             let [x, y, z] = crate::polycube::cell_coords(n);
             c.refusal = Some(format!(
-                "cell {n} ({x}, {y}, {z}): the input fits {} there {:.1}x better than the given {} (geometric fit {:.4} against {:.4}, squared cell units; refused above {ratio}x)",
-                l.name(),
+                "cell {n} ({x}, {y}, {z}): the context fits the input {:.1}x better with {} in this cell than with the given {} (geometric fit {:.4} against {:.4}, squared cell units; refused above {ratio}x)",
                 c.fit / f,
+                l.name(),
                 c.context.labels[n].name(),
                 f,
                 c.fit
@@ -735,7 +735,7 @@ mod tests {
                 // the cell named, with its given label (the best one-cell fix under the
                 // wrong context's own orientation: usually, not always, the changed cell)
                 let n: usize = why.strip_prefix("cell ").and_then(|r| r.split(' ').next()).and_then(|k| k.parse().ok()).expect(why);
-                assert!(why.contains(&format!("than the given {}", w.labels[n].name())), "case {i}: {why}");
+                assert!(why.contains(&format!("than with the given {}", w.labels[n].name())), "case {i}: {why}");
             }
             // off: never refused
             let mut c = precheck(&input, &w, &without_fit_limit(&opts)).unwrap();
