@@ -308,6 +308,19 @@ unsafe fn polycube_report(model: *const SddpmModel, mesh: *const SddpmMesh, ctx:
     j.to_string()
 }
 
+/// The default model, the through-hole test mesh and its true context (THC+Z), as
+/// C handles (the caller frees them).
+unsafe fn hole_handles() -> (*mut SddpmModel, *mut SddpmMesh, *mut SddpmContext) {
+    let mut model = null_mut();
+    assert_eq!(sddpm_model_new_default(&mut model), Status::Ok);
+    let mut mesh = null_mut();
+    assert_eq!(sddpm_mesh_load(data("cgal_hole.off").as_ptr(), null(), &mut mesh), Status::Ok);
+    let mut ctx = null_mut();
+    let s = CString::new("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    assert_eq!(sddpm_context_new_from_string(s.as_ptr(), &mut ctx), Status::Ok);
+    (model, mesh, ctx)
+}
+
 /// The C options carry the core's defaults; a negative or NaN neighbour ratio is
 /// refused before any work, and 0 (the test off) is accepted.
 #[test]
@@ -318,13 +331,7 @@ fn polycube_options_default_and_a_bad_neighbour_ratio() {
         let core = sddpm::context::generate::PolycubeOptions::default();
         assert_eq!(o.neighbour_fit_ratio, core.neighbour_fit_ratio);
         assert_eq!(o.max_fit, core.max_fit);
-        let mut model = null_mut();
-        assert_eq!(sddpm_model_new_default(&mut model), Status::Ok);
-        let mut mesh = null_mut();
-        assert_eq!(sddpm_mesh_load(data("cgal_hole.off").as_ptr(), null(), &mut mesh), Status::Ok);
-        let mut ctx = null_mut();
-        let s = CString::new("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
-        assert_eq!(sddpm_context_new_from_string(s.as_ptr(), &mut ctx), Status::Ok);
+        let (model, mesh, ctx) = hole_handles();
         for bad in [-1.0, f64::NAN, f64::INFINITY] {
             o.neighbour_fit_ratio = bad;
             let mut p = null_mut();
@@ -349,13 +356,7 @@ fn polycube_options_default_and_a_bad_neighbour_ratio() {
 #[test]
 fn c_abi_handles_shared_by_four_threads_give_the_sequential_results() {
     unsafe {
-        let mut model = null_mut();
-        assert_eq!(sddpm_model_new_default(&mut model), Status::Ok);
-        let mut mesh = null_mut();
-        assert_eq!(sddpm_mesh_load(data("cgal_hole.off").as_ptr(), null(), &mut mesh), Status::Ok);
-        let mut ctx = null_mut();
-        let s = CString::new("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
-        assert_eq!(sddpm_context_new_from_string(s.as_ptr(), &mut ctx), Status::Ok);
+        let (model, mesh, ctx) = hole_handles();
         let seeds = [1u64, 2, 1, 3];
         let seq: Vec<String> = seeds.iter().map(|&sd| polycube_report(model, mesh, ctx, sd)).collect();
         assert_eq!(seq[0], seq[2], "the same seed gave two different reports");
