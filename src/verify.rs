@@ -139,15 +139,7 @@ fn centre(pts: &[[f64; 3]]) -> Vec<[f64; 3]> {
     if pts.is_empty() {
         return Vec::new();
     }
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in pts {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let m: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a] + hi[a]));
+    let m = crate::geometry::Aabb::of_points(pts).centre();
     pts.iter().map(|p| [p[0] - m[0], p[1] - m[1], p[2] - m[2]]).collect()
 }
 
