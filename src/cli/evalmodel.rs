@@ -50,6 +50,10 @@ pub struct EvalArgs {
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
     pub sweep: bool,
+    /// TCV's coverage term without the template faces shared with occupied
+    /// neighbours (VerifyOptions::visible_coverage; measured, not the default).
+    #[arg(long)]
+    pub visible_coverage: bool,
 }
 
 pub fn run(a: &EvalArgs) -> Result<i32> {
@@ -79,6 +83,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
     }
+    opts.verify.visible_coverage = a.visible_coverage;
     if a.sweep {
         let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];
         let ps = [1.0, 2.0];

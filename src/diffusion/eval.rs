@@ -154,6 +154,9 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
 struct SweepCell {
     local: Vec<[f64; 3]>,
     target: Primitive,
+    /// Faces shared with occupied neighbours (`verify::shared_faces`) when the options
+    /// ask for visible coverage, else 0 (coverage over the whole template).
+    shared: u8,
 }
 
 /// TCV acceptance for one (tau_CD, p) pair.
@@ -222,7 +225,11 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
         Some(
             c.context
                 .occupied()
-                .map(|k| SweepCell { local: crate::verify::local_points(&crate::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale), target: c.context.labels[k] })
+                .map(|k| SweepCell {
+                    local: crate::verify::local_points(&crate::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale),
+                    target: c.context.labels[k],
+                    shared: if opts.verify.visible_coverage { crate::verify::shared_faces(&c.context.labels, k) } else { 0 },
+                })
                 .collect(),
         )
     };
@@ -274,7 +281,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 let mut all = true;
                 let mut nearest = 0;
                 for c in cells {
-                    let d: Vec<f64> = Primitive::solids().map(|q| crate::verify::pcd(&c.local, &tpl[q.label() as usize], tau, p)).collect();
+                    let d: Vec<f64> = Primitive::solids().map(|q| crate::verify::cell_pcd(&c.local, &tpl[q.label() as usize], c.shared, tau, p)).collect();
                     let dt = d[c.target.label() as usize - 1];
                     let best = d.iter().cloned().fold(f64::INFINITY, f64::min);
                     let near = dt <= best;
