@@ -17,8 +17,9 @@
 //! Prints one line per case, a Markdown table per group and writes a CSV.
 //!
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
-//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=1
-//! turns on VerifyOptions::visible_coverage, RECOVERY_JOINT=1 turns on
+//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=0/1
+//! sets VerifyOptions::visible_coverage, RECOVERY_VISIBLE_PRIOR=0/1
+//! SamplerOptions::visible_prior, RECOVERY_START_STEP=t SamplerOptions::start_step, RECOVERY_JOINT=1 turns on
 //! AutoOptions::joint_labels, RECOVERY_DIAG=1 prints where each true placement
 //! stands in the automated search, RECOVERY_USER_ONLY=1 runs
 //! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
@@ -134,8 +135,18 @@ fn main() -> sddpm::Result<()> {
     if let Some(t) = std::env::var("RECOVERY_TAU_CD").ok().and_then(|s| s.parse().ok()) {
         popts.verify.tau_cd = t;
     }
-    // RECOVERY_VISIBLE_COVERAGE=1: TCV's coverage off the shared faces (VerifyOptions::visible_coverage)
-    popts.verify.visible_coverage = std::env::var_os("RECOVERY_VISIBLE_COVERAGE").is_some();
+    // RECOVERY_VISIBLE_COVERAGE=0/1: TCV's coverage off the shared faces (VerifyOptions::visible_coverage)
+    if let Ok(v) = std::env::var("RECOVERY_VISIBLE_COVERAGE") {
+        popts.verify.visible_coverage = v == "1";
+    }
+    // RECOVERY_VISIBLE_PRIOR=0/1: the template attention's prior off the shared faces (SamplerOptions::visible_prior)
+    if let Ok(v) = std::env::var("RECOVERY_VISIBLE_PRIOR") {
+        popts.sampler.visible_prior = v == "1";
+    }
+    // RECOVERY_START_STEP=t: the sampler's start step (SamplerOptions::start_step)
+    if let Some(t) = std::env::var("RECOVERY_START_STEP").ok().and_then(|s| s.parse().ok()) {
+        popts.sampler.start_step = t;
+    }
     // RECOVERY_STEPS=n: the sampler's strided steps (SamplerOptions::steps) for this run
     if let Some(n) = std::env::var("RECOVERY_STEPS").ok().and_then(|s| s.parse().ok()) {
         popts.sampler.steps = n;

@@ -51,13 +51,12 @@ pub struct VerifyOptions {
     pub template_points: usize,
     /// Leave a template's faces that the context shares with an occupied neighbour
     /// out of the coverage half of the PCD (template to output); see [`cell_pcd`].
-    /// The input has no surface there (they lie inside the assembled solid), but the
-    /// diffusion output has: the template attention draws each cell's points from its
-    /// whole primitive. Measured (BENCHMARKS.md, "TCV: coverage of the shared
-    /// faces"): the laid-out input passes TCV in 95/96 four-to-twelve-cell cases with
-    /// it and 0/96 without, the diffusion output 77/96 with it and 79/96 without, and
-    /// the automated mode recovers fewer; so false (the paper's PCD over the whole
-    /// template) is the default.
+    /// They lie inside the assembled solid, so the input has no surface there, and
+    /// with the sampler's visible prior (`SamplerOptions::visible_prior`) neither has
+    /// the output; the two go together. Off by default (the paper's PCD over the
+    /// whole template), with the whole-primitive prior whose output carries those
+    /// faces. Measured in BENCHMARKS.md ("TCV: coverage of the shared faces", "The
+    /// visible prior").
     pub visible_coverage: bool,
 }
 
@@ -453,8 +452,8 @@ mod tests {
         for c in visible.cells.iter().filter(|c| c.label != "null") {
             assert_eq!(c.nearest.as_deref(), Some(c.label.as_str()), "cell {}", c.cell);
         }
-        // Asking for coverage on the shared faces too (the default), the exact surface
-        // fails: the missing faces cost more than tau_CD.
+        // Asking for coverage on the shared faces too (the paper's PCD, the default),
+        // the exact surface fails: the missing faces cost more than tau_CD.
         let whole = verify(&inp.tensor, &ctx, &inp.frame, &VerifyOptions::default());
         assert!(!whole.tcv_pass);
         assert!(whole.mean_target_pcd > 3.0 * visible.mean_target_pcd, "{} vs {}", whole.mean_target_pcd, visible.mean_target_pcd);

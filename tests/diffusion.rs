@@ -294,6 +294,25 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
         let alone: Vec<f32> = with.clone().with_kernel_gate(Some(1.0)).forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
         let worst = alone.iter().zip(&epsh).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
         assert!((worst as f64) < 2e-4 * sa / sd + 1e-4, "t {t}: the estimate alone differs from the tensor estimate by {worst}");
+        // with the visible prior (cells 0 and 1 share a face, cells 1 and 2 another) both
+        // paths read the same other prior, and the estimate changes
+        let vis = with.clone().with_visible_prior(true);
+        let (_, eps_v) = vis.kernel_estimate(xt(), &[t], ct()).unwrap();
+        let eps_v: Vec<f32> = eps_v.into_data().try_into_vec().unwrap();
+        let alone_v: Vec<f32> = vis.with_kernel_gate(Some(1.0)).forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
+        let worst = alone_v.iter().zip(&eps_v).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+        assert!((worst as f64) < 2e-4 * sa / sd + 1e-4, "t {t}: visible prior, direct vs tensor differ by {worst}");
+        let moved = eps_v.iter().zip(&epsh).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+        assert!(moved > 1e-3, "t {t}: the visible prior changed nothing");
+    }
+    // the visible prior holds no point on a shared face: cell 1 (1, 0, 0) shares x = 1
+    // and x = 2 (grid units) with cells 0 and 2
+    let vis = sddpm::diffusion::model::prior_image_visible(&ctx.one_hot());
+    let frame = sddpm::polycube::dataset::context_frame(&ctx).unwrap();
+    for p in 0..512 {
+        let (r, c) = slot(1, p);
+        let g = frame.to_grid([0, 1, 2].map(|ch| vis[flat(ch, r, c)] as f64));
+        assert!((g[0] - 1.0).abs() > 1e-6 && (g[0] - 2.0).abs() > 1e-6, "point {p} at {g:?}");
     }
 }
 

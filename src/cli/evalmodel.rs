@@ -51,9 +51,13 @@ pub struct EvalArgs {
     #[arg(long)]
     pub sweep: bool,
     /// TCV's coverage term without the template faces shared with occupied
-    /// neighbours (VerifyOptions::visible_coverage; measured, not the default).
+    /// neighbours (VerifyOptions::visible_coverage; default: the library's).
     #[arg(long)]
-    pub visible_coverage: bool,
+    pub visible_coverage: Option<bool>,
+    /// The template attention's prior without those faces
+    /// (SamplerOptions::visible_prior; default: the library's).
+    #[arg(long)]
+    pub visible_prior: Option<bool>,
 }
 
 pub fn run(a: &EvalArgs) -> Result<i32> {
@@ -83,7 +87,12 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if let Some(t) = a.tau_cd {
         opts.verify.tau_cd = t;
     }
-    opts.verify.visible_coverage = a.visible_coverage;
+    if let Some(v) = a.visible_coverage {
+        opts.verify.visible_coverage = v;
+    }
+    if let Some(v) = a.visible_prior {
+        opts.sampler.visible_prior = v;
+    }
     if a.sweep {
         let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];
         let ps = [1.0, 2.0];

@@ -49,6 +49,13 @@ pub struct PolycubeArgs {
     /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
     #[arg(long, allow_negative_numbers = true)]
     pub kernel_gate: Option<f64>,
+    /// The template attention's prior and TCV's coverage without the template faces a
+    /// cell shares with an occupied neighbour (SamplerOptions::visible_prior and
+    /// VerifyOptions::visible_coverage): more true contexts pass in the user-guided
+    /// mode, the automated search ranks worse (BENCHMARKS.md, "The visible prior";
+    /// measured with --start-step 100).
+    #[arg(long)]
+    pub visible: bool,
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
@@ -95,6 +102,10 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     }
     if let Some(g) = a.kernel_gate {
         o.sampler.kernel_gate = kernel_gate_arg(g);
+    }
+    if a.visible {
+        o.sampler.visible_prior = true;
+        o.verify.visible_coverage = true;
     }
     o
 }

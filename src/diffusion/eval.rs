@@ -110,7 +110,13 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         }
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
             let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
-            let exact = sample_cells(&ctx, 1.0, &mut rng);
+            // the exact polycube's surface per cell: with the visible prior the output
+            // carries no shared faces, and neither does the assembled surface
+            let exact = if opts.sampler.visible_prior {
+                crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
+            } else {
+                sample_cells(&ctx, 1.0, &mut rng)
+            };
             let blocks = unlayout(out);
             let scale = 1.0 / inp.frame.scale; // cell units
             for k in 0..NUM_CELLS {

@@ -290,11 +290,21 @@ impl Denoiser {
         self
     }
 
+    /// Make the template attention attend to the visible part of each cell's
+    /// primitive (true) or to the whole primitive (false, what training used). A
+    /// no-op without template attention.
+    pub fn with_visible_prior(mut self, visible: bool) -> Self {
+        if let Some(k) = self.kernel.as_mut() {
+            k.visible_prior = visible;
+        }
+        self
+    }
+
     /// The template attention's estimate (x0_hat, eps_hat) for a batch, or None
     /// without it.
     pub fn kernel_estimate(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Option<(Tensor<4>, Tensor<4>)> {
         let k = self.kernel.as_ref()?;
-        let prior = prior_tensor(ctx, &x.device());
+        let prior = prior_tensor(ctx, &x.device(), k.visible_prior);
         Some(k.estimate(x, t, prior))
     }
 
@@ -313,9 +323,14 @@ impl Denoiser {
         let cemb = self.ctx2.forward(silu(self.ctx1.forward(ctx.clone())));
         let emb = silu(temb.clone() + cemb);
         // the template prior is read off the context before the context is consumed
-        let prior_img = (self.prior_in.is_some() || self.kernel.is_some()).then(|| prior_tensor(ctx.clone(), &device));
-        let prior = self.prior_in.as_ref().zip(prior_img.clone()).map(|(p, img)| p.forward(img));
-        let kern = self.kernel.as_ref().zip(prior_img).map(|(k, img)| {
+        // (the U-Net's own prior input always sees whole primitives, as in training)
+        let prior_img = (self.prior_in.is_some() || self.kernel.is_some()).then(|| prior_tensor(ctx.clone(), &device, false));
+        let kernel_img = match self.kernel.as_ref() {
+            Some(k) if k.visible_prior => Some(prior_tensor(ctx.clone(), &device, true)),
+            _ => prior_img.clone(),
+        };
+        let prior = self.prior_in.as_ref().zip(prior_img).map(|(p, img)| p.forward(img));
+        let kern = self.kernel.as_ref().zip(kernel_img).map(|(k, img)| {
             let (x0, eps) = k.estimate(x.clone(), t, img);
             let gate = match k.gate_override {
                 Some(g) => Tensor::<4>::full([b, 1, 1, 1], g, &device),
@@ -357,11 +372,12 @@ impl Denoiser {
     }
 }
 
-/// The template priors of a batch of contexts as a [B, 3, 64, 96] tensor.
-fn prior_tensor(ctx: Tensor<2>, device: &Device) -> Tensor<4> {
+/// The template priors of a batch of contexts as a [B, 3, 64, 96] tensor (each
+/// cell's visible part with `visible`, see [`prior_image_visible`]).
+fn prior_tensor(ctx: Tensor<2>, device: &Device, visible: bool) -> Tensor<4> {
     let b = ctx.dims()[0];
     let oh: Vec<f32> = ctx.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
-    let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(prior_image).collect();
+    let img: Vec<f32> = oh.chunks(CONTEXT_DIM).flat_map(|o| prior_image_of(o, visible)).collect();
     Tensor::<4>::from_data(TensorData::new(img, [b, 3, TENSOR_H, TENSOR_W]), device)
 }
 
@@ -392,6 +408,11 @@ pub struct KernelHead {
     /// A fixed gate instead of the learned one (sampler option; None = learned).
     #[module(skip)]
     gate_override: Option<f32>,
+    /// Attend to each cell's primitive sampled off the faces it shares with occupied
+    /// neighbours ([`prior_image_visible`]) instead of the whole primitive (sampler
+    /// option `SamplerOptions::visible_prior`).
+    #[module(skip)]
+    visible_prior: bool,
     /// Per timestep: sqrt(ab), sqrt(1 - ab), the mean shift per channel.
     #[module(skip)]
     coef: Vec<[f32; 5]>,
@@ -420,6 +441,7 @@ impl KernelHead {
             log_sigma: burn::module::Param::from_tensor(Tensor::<1>::from_floats([KERNEL_SIGMA0.ln()], device)),
             log_rho: burn::module::Param::from_tensor(Tensor::<1>::from_floats([KERNEL_RHO0.ln()], device)),
             gate_override: None,
+            visible_prior: false,
             coef: Vec::new(),
             rank_d2: {
                 let np = BLOCK_H * BLOCK_W;
@@ -479,7 +501,7 @@ impl KernelHead {
         let inv_rho2 = (-2.0 * scalar(self.log_rho.val())).exp();
         let xs: Vec<f32> = x.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
         let oh: Vec<f32> = ctx.into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default();
-        let priors: Vec<Vec<f32>> = oh.chunks(CONTEXT_DIM).map(prior_image).collect();
+        let priors: Vec<Vec<f32>> = oh.chunks(CONTEXT_DIM).map(|o| prior_image_of(o, self.visible_prior)).collect();
         assert_eq!(xs.len(), b * TENSOR_LEN);
         let np = POINTS_PER_CELL;
         let blocks: Vec<Vec<f32>> = (0..b * NUM_CELLS)
@@ -572,6 +594,16 @@ pub const PRIOR_SEED: u64 = 0x5052_494f_52;
 /// `Context::one_hot_unlabelled`) hold zeros. The occupied box, hence the frame, counts
 /// withheld cells as occupied.
 pub fn prior_image(one_hot: &[f32]) -> Vec<f32> {
+    prior_image_of(one_hot, false)
+}
+
+/// [`prior_image`] with each cell's primitive sampled off the faces it shares with
+/// occupied neighbours (`dataset::sample_cells_visible`).
+pub fn prior_image_visible(one_hot: &[f32]) -> Vec<f32> {
+    prior_image_of(one_hot, true)
+}
+
+fn prior_image_of(one_hot: &[f32], visible: bool) -> Vec<f32> {
     use crate::polycube::Primitive;
     let nl = CONTEXT_DIM / NUM_CELLS;
     let mut labels = [Primitive::Null; NUM_CELLS];
@@ -588,7 +620,11 @@ pub fn prior_image(one_hot: &[f32]) -> Vec<f32> {
     }
     let ctx = crate::context::Context { labels };
     let mut rng = crate::polycube::dataset::item_rng(PRIOR_SEED, 0);
-    let mut cells = crate::polycube::dataset::sample_cells(&ctx, 1.0, &mut rng);
+    let mut cells = if visible {
+        crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
+    } else {
+        crate::polycube::dataset::sample_cells(&ctx, 1.0, &mut rng)
+    };
     for n in 0..NUM_CELLS {
         if withheld[n] {
             cells[n].clear();

@@ -70,6 +70,14 @@ pub struct SamplerOptions {
     /// None = the gate the weights learned. Ignored by weights without template
     /// attention.
     pub kernel_gate: Option<f64>,
+    /// The template attention attends to each cell's primitive sampled off the faces
+    /// the context gives an occupied neighbour (`model::prior_image_visible`), the part
+    /// of the assembled surface the cell's input can carry, instead of the whole
+    /// primitive. The sorted layout ties slot i to the prior points near rank i, so a
+    /// prior holding faces the input lacks shifts the correspondence of every point.
+    /// Goes with `VerifyOptions::visible_coverage` (the output then has no points on
+    /// those faces). Measured in BENCHMARKS.md ("The visible prior").
+    pub visible_prior: bool,
 }
 
 impl Default for SamplerOptions {
@@ -87,6 +95,7 @@ impl Default for SamplerOptions {
             eps_scale: 1.0,
             guidance: 0.0,
             kernel_gate: DEFAULT_KERNEL_GATE,
+            visible_prior: DEFAULT_VISIBLE_PRIOR,
         }
     }
 }
@@ -100,8 +109,13 @@ pub const DEFAULT_STEPS: usize = 50;
 /// U-Net alone); on the real meshes of the main job the estimate alone verifies
 /// where the U-Net verified none.
 pub const DEFAULT_KERNEL_GATE: Option<f64> = Some(1.0);
-/// Default start step (0 = T), chosen by the measurement in BENCHMARKS.md.
+/// Default start step (0 = T), chosen by the measurement in BENCHMARKS.md (with the
+/// visible prior, 100 measured better: "The visible prior").
 pub const DEFAULT_START_STEP: usize = 200;
+/// Default of `SamplerOptions::visible_prior`: off. It lets more true contexts pass
+/// TCV in the user-guided mode but makes the automated mode's ranking pick wrong
+/// verified candidates (BENCHMARKS.md, "The visible prior").
+pub const DEFAULT_VISIBLE_PRIOR: bool = false;
 /// Default refinement passes and their timestep (BENCHMARKS.md).
 pub const DEFAULT_REFINE_PASSES: usize = 0;
 pub const DEFAULT_REFINE_T: usize = 20;
@@ -177,13 +191,12 @@ pub fn reverse_diffusion(
         }
     }
     let n = inputs.len();
-    let gated;
-    let net = match opts.kernel_gate {
-        Some(g) => {
-            gated = model.net.clone().with_kernel_gate(Some(g as f32));
-            &gated
-        }
-        None => &model.net,
+    let configured;
+    let net = if opts.kernel_gate.is_some() || opts.visible_prior {
+        configured = model.net.clone().with_kernel_gate(opts.kernel_gate.map(|g| g as f32)).with_visible_prior(opts.visible_prior);
+        &configured
+    } else {
+        &model.net
     };
     let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;

@@ -90,9 +90,68 @@ pub fn sample_primitive(p: Primitive, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f6
         .collect()
 }
 
+/// `n` points uniform by area on the part of primitive `p`'s surface off the cell
+/// faces `shared` names (bit 2a: the face at the low end of axis a, bit 2a + 1: the
+/// high end; see `verify::shared_faces`), in cell-local coordinates. A primitive with
+/// nothing left (impossible for the ten solids: a cell has at most six shared faces,
+/// and its hole walls are never on a face) gives no points.
+pub fn sample_primitive_visible(p: Primitive, shared: u8, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; 3]> {
+    let quads: Vec<&[[f64; 3]; 4]> = template_quads()[p.label() as usize]
+        .iter()
+        .filter(|q| {
+            !(0..3).any(|a| {
+                (shared >> (2 * a) & 1 == 1 && q.iter().all(|v| v[a] == 0.0)) || (shared >> (2 * a + 1) & 1 == 1 && q.iter().all(|v| v[a] == 1.0))
+            })
+        })
+        .collect();
+    if quads.is_empty() {
+        return Vec::new();
+    }
+    (0..n)
+        .map(|_| {
+            let q = quads[rng.random_range(0..quads.len())];
+            let (u, w): (f64, f64) = (rng.random(), rng.random());
+            let mut x = [0.0; 3];
+            for a in 0..3 {
+                x[a] = q[0][a] + u * (q[1][a] - q[0][a]) + w * (q[3][a] - q[0][a]);
+            }
+            x
+        })
+        .collect()
+}
+
 /// The normalised frame of a context: its occupied cells' box, longest edge 2, centred.
 pub fn context_frame(ctx: &Context) -> Option<BoxFrame> {
     occupied_cell_box(&ctx.labels).map(|(lo, hi)| BoxFrame::for_box(lo.map(|v| v as f64), hi.map(|v| v as f64)))
+}
+
+/// [`sample_cells`] with each cell's primitive sampled off the faces it shares with
+/// occupied neighbours ([`sample_primitive_visible`]): the part of the assembled
+/// surface a cell can carry.
+pub fn sample_cells_visible(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng) -> Vec<Vec<[f32; 3]>> {
+    let frame = match context_frame(ctx) {
+        Some(f) => f,
+        None => return vec![Vec::new(); NUM_CELLS],
+    };
+    (0..NUM_CELLS)
+        .map(|n| {
+            let p = ctx.labels[n];
+            if p == Primitive::Null {
+                return Vec::new();
+            }
+            let [i, j, k] = cell_coords(n);
+            let shared = crate::verify::shared_faces(&ctx.labels, n);
+            let pts: Vec<[f32; 3]> = sample_primitive_visible(p, shared, POINTS_PER_CELL, rng)
+                .into_iter()
+                .map(|x| {
+                    let g = [x[0] + i as f64, x[1] + j as f64, x[2] + k as f64];
+                    frame.to_normalised(g).map(|v| (v * scale) as f32)
+                })
+                .collect();
+            let order = sort_order(&pts);
+            order.into_iter().map(|o| pts[o]).collect()
+        })
+        .collect()
 }
 
 /// Sample the point sets of a context as DESIGN.md fixes them: per occupied cell,
