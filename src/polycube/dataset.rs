@@ -72,22 +72,7 @@ pub fn template_quads() -> &'static Vec<Vec<[[f64; 3]; 4]>> {
 
 /// `n` points uniform by area on primitive `p`'s surface, in cell-local coordinates.
 pub fn sample_primitive(p: Primitive, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; 3]> {
-    let quads = &template_quads()[p.label() as usize];
-    if quads.is_empty() {
-        return Vec::new();
-    }
-    // All quads are squares of the same size: uniform over quads is uniform by area.
-    (0..n)
-        .map(|_| {
-            let q = &quads[rng.random_range(0..quads.len())];
-            let (u, w): (f64, f64) = (rng.random(), rng.random());
-            let mut x = [0.0; 3];
-            for a in 0..3 {
-                x[a] = q[0][a] + u * (q[1][a] - q[0][a]) + w * (q[3][a] - q[0][a]);
-            }
-            x
-        })
-        .collect()
+    sample_primitive_visible(p, 0, n, rng)
 }
 
 /// `n` points uniform by area on the part of primitive `p`'s surface off the cell
@@ -107,6 +92,7 @@ pub fn sample_primitive_visible(p: Primitive, shared: u8, n: usize, rng: &mut Ch
     if quads.is_empty() {
         return Vec::new();
     }
+    // All quads are squares of the same size: uniform over quads is uniform by area.
     (0..n)
         .map(|_| {
             let q = quads[rng.random_range(0..quads.len())];
@@ -129,35 +115,17 @@ pub fn context_frame(ctx: &Context) -> Option<BoxFrame> {
 /// occupied neighbours ([`sample_primitive_visible`]): the part of the assembled
 /// surface a cell can carry.
 pub fn sample_cells_visible(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng) -> Vec<Vec<[f32; 3]>> {
-    let frame = match context_frame(ctx) {
-        Some(f) => f,
-        None => return vec![Vec::new(); NUM_CELLS],
-    };
-    (0..NUM_CELLS)
-        .map(|n| {
-            let p = ctx.labels[n];
-            if p == Primitive::Null {
-                return Vec::new();
-            }
-            let [i, j, k] = cell_coords(n);
-            let shared = crate::verify::shared_faces(&ctx.labels, n);
-            let pts: Vec<[f32; 3]> = sample_primitive_visible(p, shared, POINTS_PER_CELL, rng)
-                .into_iter()
-                .map(|x| {
-                    let g = [x[0] + i as f64, x[1] + j as f64, x[2] + k as f64];
-                    frame.to_normalised(g).map(|v| (v * scale) as f32)
-                })
-                .collect();
-            let order = sort_order(&pts);
-            order.into_iter().map(|o| pts[o]).collect()
-        })
-        .collect()
+    sample_cells_of(ctx, scale, rng, true)
 }
 
 /// Sample the point sets of a context as DESIGN.md fixes them: per occupied cell,
 /// 512 points uniform on its primitive's surface at its grid position, normalised by
 /// the occupied box and multiplied by `scale`; each cell sorted lexicographically.
 pub fn sample_cells(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng) -> Vec<Vec<[f32; 3]>> {
+    sample_cells_of(ctx, scale, rng, false)
+}
+
+fn sample_cells_of(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng, visible: bool) -> Vec<Vec<[f32; 3]>> {
     let frame = match context_frame(ctx) {
         Some(f) => f,
         None => return vec![Vec::new(); NUM_CELLS],
@@ -169,7 +137,8 @@ pub fn sample_cells(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng) -> Vec<Vec<
                 return Vec::new();
             }
             let [i, j, k] = cell_coords(n);
-            let pts: Vec<[f32; 3]> = sample_primitive(p, POINTS_PER_CELL, rng)
+            let shared = if visible { crate::verify::shared_faces(&ctx.labels, n) } else { 0 };
+            let pts: Vec<[f32; 3]> = sample_primitive_visible(p, shared, POINTS_PER_CELL, rng)
                 .into_iter()
                 .map(|x| {
                     let g = [x[0] + i as f64, x[1] + j as f64, x[2] + k as f64];
