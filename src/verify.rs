@@ -231,11 +231,11 @@ pub fn visible_part(template: &[[f64; 3]], shared: u8) -> Vec<[f64; 3]> {
 /// The PCD of a cell's centred points `x` (cell units) to a template: the accuracy
 /// half (each point to its nearest template point) over the whole template, the
 /// coverage half (each template point to its nearest point of `x`) over the
-/// template's points off the faces `shared` names. Where the context puts an occupied
-/// neighbour against a face, the assembled solid has no surface there (or only the
-/// cap of the neighbour's hole), so neither has the input nor, therefore, the output;
-/// asking for coverage there penalises every label of the cell by the area of that
-/// face, which is what blurs a through hole capped by its neighbour with a blind one.
+/// template's points off the faces `shared` names (0: the plain [`pcd`]). Where the
+/// context puts an occupied neighbour against a face, the assembled solid has no
+/// surface there (or only the cap of the neighbour's hole), so the input has none,
+/// and neither has the output of the visible prior; asking for coverage there
+/// charges every label of the cell for the area of that face.
 pub fn cell_pcd(x: &[[f64; 3]], template: &[[f64; 3]], shared: u8, tau: f64, p: f64) -> f64 {
     if shared == 0 {
         return pcd(x, template, tau, p);
