@@ -19,7 +19,8 @@
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
 //! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=0/1
 //! sets VerifyOptions::visible_coverage, RECOVERY_VISIBLE_PRIOR=0/1
-//! SamplerOptions::visible_prior, RECOVERY_START_STEP=t SamplerOptions::start_step, RECOVERY_JOINT=1 turns on
+//! SamplerOptions::visible_prior, RECOVERY_START_STEP=t SamplerOptions::start_step,
+//! RECOVERY_VISIBLE_RETRY=1 PolycubeOptions::visible_retry, RECOVERY_JOINT=1 turns on
 //! AutoOptions::joint_labels, RECOVERY_DIAG=1 prints where each true placement
 //! stands in the automated search, RECOVERY_USER_ONLY=1 runs
 //! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
@@ -143,6 +144,8 @@ fn main() -> sddpm::Result<()> {
     if let Ok(v) = std::env::var("RECOVERY_VISIBLE_PRIOR") {
         popts.sampler.visible_prior = v == "1";
     }
+    // RECOVERY_VISIBLE_RETRY=1: PolycubeOptions::visible_retry
+    popts.visible_retry = std::env::var_os("RECOVERY_VISIBLE_RETRY").is_some();
     // RECOVERY_START_STEP=t: the sampler's start step (SamplerOptions::start_step)
     if let Some(t) = std::env::var("RECOVERY_START_STEP").ok().and_then(|s| s.parse().ok()) {
         popts.sampler.start_step = t;
