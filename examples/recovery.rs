@@ -193,7 +193,9 @@ fn main() -> sddpm::Result<()> {
                             }
                         }
                         for c in &pr.candidates {
-                            println!("  cand {} {} fit {:.4} {:?} score {:?}", c.context, c.rotation, c.fit, c.stage, c.score);
+                            let pcd = c.report.as_ref().map(|r| r.mean_target_pcd);
+                            let truth_like = congruent(&c.context.assemble(), &truth_solid);
+                            println!("  cand {} {} fit {:.4} {:?} score {:?} pcd {:?} fidelity {:?} retry {} truth {}", c.context, c.rotation, c.fit, c.stage, c.score, pcd, c.fidelity, c.visible_retry, truth_like);
                         }
                     }
                     if std::env::var_os("RECOVERY_DIAG").is_some() {
