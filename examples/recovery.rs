@@ -20,10 +20,11 @@
 //! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=0/1
 //! sets VerifyOptions::visible_coverage, RECOVERY_VISIBLE_PRIOR=0/1
 //! SamplerOptions::visible_prior, RECOVERY_START_STEP=t SamplerOptions::start_step,
-//! RECOVERY_VISIBLE_RETRY=1 PolycubeOptions::visible_retry, RECOVERY_JOINT=1 turns on
+//! RECOVERY_VISIBLE_RETRY=0/1 PolycubeOptions::visible_retry (default on), RECOVERY_JOINT=1 turns on
 //! AutoOptions::joint_labels, RECOVERY_DIAG=1 prints where each true placement
 //! stands in the automated search, RECOVERY_USER_ONLY=1 runs
-//! only the user-guided mode, RECOVERY_VERBOSE=1 prints boxes, candidates and the
+//! only the user-guided mode, RECOVERY_DUMP=FILE appends every automated candidate's
+//! per-cell fits and PCDs as JSON lines, RECOVERY_VERBOSE=1 prints boxes, candidates and the
 //! user-guided verification per cell)
 //! (defaults 8, 5000, build/recovery.csv, simple,medium,complex)
 use sddpm::context::auto::AutoOptions;
@@ -121,6 +122,47 @@ fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOpt
     Ok(())
 }
 
+/// RECOVERY_DUMP=FILE: appends one JSON line per automated candidate (group, case,
+/// context, stage, score, whether it is the truth, its per-cell geometric fits and
+/// per-cell target PCD and nearest-other-template PCD), for studying rankings offline.
+fn dump_candidates(path: &std::path::Path, group: &str, case: usize, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, truth_solid: &sddpm::polycube::VoxelGrid) -> sddpm::Result<()> {
+    use sddpm::context::generate::{fit_score_cells, polycube_samples, prepare_input, FIT_SAMPLES};
+    use std::io::Write as _;
+    let input = prepare_input(mesh, popts)?;
+    let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
+    let io = |e: std::io::Error| sddpm::Error::io(path.display(), e);
+    let mut f = std::fs::OpenOptions::new().create(true).append(true).open(path).map_err(io)?;
+    for (k, c) in pr.candidates.iter().enumerate() {
+        let cells = fit_score_cells(fit_sub, &c.context, c.axis_rotation, &polycube_samples(&c.context, FIT_SAMPLES), [1.0; 3]);
+        let cell_fit: Vec<Option<f64>> = cells.iter().map(|v| (!v.is_nan()).then_some(*v)).collect();
+        let (pcd_target, pcd_other): (Vec<f64>, Vec<f64>) = c
+            .report
+            .as_ref()
+            .map(|r| {
+                r.cells
+                    .iter()
+                    .map(|cr| {
+                        // pcd[j] is the template of label j + 1 (labels 1..10)
+                        let li = sddpm::polycube::Primitive::solids().position(|p| p.name() == cr.label);
+                        let t = li.and_then(|i| cr.pcd.get(i)).copied().unwrap_or(f64::NAN);
+                        let o = cr.pcd.iter().enumerate().filter(|(j, _)| Some(*j) != li).map(|(_, v)| *v).fold(f64::INFINITY, f64::min);
+                        (t, o)
+                    })
+                    .unzip()
+            })
+            .unwrap_or_default();
+        let line = serde_json::json!({
+            "group": group, "case": case, "k": k, "context": c.context.names(), "rotation": c.rotation,
+            "stage": format!("{:?}", c.stage), "fit": c.fit, "score": c.score, "fidelity": c.fidelity,
+            "chosen": pr.chosen == Some(k), "truth": congruent(&c.context.assemble(), truth_solid),
+            "cell_fit": cell_fit, "pcd_target": pcd_target, "pcd_other": pcd_other,
+            "pcd_mean": c.report.as_ref().map(|r| r.mean_target_pcd),
+        });
+        writeln!(f, "{line}").map_err(io)?;
+    }
+    Ok(())
+}
+
 fn main() -> sddpm::Result<()> {
     let a: Vec<String> = std::env::args().collect();
     let n: usize = a.get(1).map(|s| s.parse().expect("CASES_PER_GROUP")).unwrap_or(8);
@@ -144,8 +186,10 @@ fn main() -> sddpm::Result<()> {
     if let Ok(v) = std::env::var("RECOVERY_VISIBLE_PRIOR") {
         popts.sampler.visible_prior = v == "1";
     }
-    // RECOVERY_VISIBLE_RETRY=1: PolycubeOptions::visible_retry
-    popts.visible_retry = std::env::var_os("RECOVERY_VISIBLE_RETRY").is_some();
+    // RECOVERY_VISIBLE_RETRY=0/1: PolycubeOptions::visible_retry (default: the library's)
+    if let Ok(v) = std::env::var("RECOVERY_VISIBLE_RETRY") {
+        popts.visible_retry = v != "0";
+    }
     // RECOVERY_START_STEP=t: the sampler's start step (SamplerOptions::start_step)
     if let Some(t) = std::env::var("RECOVERY_START_STEP").ok().and_then(|s| s.parse().ok()) {
         popts.sampler.start_step = t;
@@ -197,6 +241,9 @@ fn main() -> sddpm::Result<()> {
                             let truth_like = congruent(&c.context.assemble(), &truth_solid);
                             println!("  cand {} {} fit {:.4} {:?} score {:?} pcd {:?} fidelity {:?} retry {} truth {}", c.context, c.rotation, c.fit, c.stage, c.score, pcd, c.fidelity, c.visible_retry, truth_like);
                         }
+                    }
+                    if let Some(path) = std::env::var_os("RECOVERY_DUMP") {
+                        dump_candidates(std::path::Path::new(&path), name, i, mesh, &popts, &pr, &truth_solid)?;
                     }
                     if std::env::var_os("RECOVERY_DIAG").is_some() {
                         diagnose(truth, mesh, &popts, &pr, auto.as_ref())?;

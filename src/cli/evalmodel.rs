@@ -58,6 +58,10 @@ pub struct EvalArgs {
     /// (SamplerOptions::visible_prior; default: the library's).
     #[arg(long)]
     pub visible_prior: Option<bool>,
+    /// A second diffusion with the visible prior for a candidate that fails
+    /// (PolycubeOptions::visible_retry; default: the library's, on).
+    #[arg(long)]
+    pub visible_retry: Option<bool>,
 }
 
 pub fn run(a: &EvalArgs) -> Result<i32> {
@@ -92,6 +96,9 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     }
     if let Some(v) = a.visible_prior {
         opts.sampler.visible_prior = v;
+    }
+    if let Some(v) = a.visible_retry {
+        opts.visible_retry = v;
     }
     if a.sweep {
         let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];

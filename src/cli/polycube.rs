@@ -56,6 +56,10 @@ pub struct PolycubeArgs {
     /// measured with --start-step 100).
     #[arg(long)]
     pub visible: bool,
+    /// Do not diffuse a candidate that fails verification a second time with the
+    /// visible prior (PolycubeOptions::visible_retry, on by default).
+    #[arg(long)]
+    pub no_visible_retry: bool,
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
@@ -106,6 +110,9 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     if a.visible {
         o.sampler.visible_prior = true;
         o.verify.visible_coverage = true;
+    }
+    if a.no_visible_retry {
+        o.visible_retry = false;
     }
     o
 }

@@ -13,11 +13,13 @@
 //!    inside it plus samples on the faces where the subregion is cut out of the
 //!    solid) and verified (GOCC + TCV), all in one batch.
 //! 4. Global stage: products of the kept labels whose assembly is valid and has the
-//!    input's genus are ranked by geometric fit; the best ones pass the occupancy
-//!    pre-check, are diffused in one batch and verified.
+//!    input's genus are ranked by geometric fit averaged over their cells; the best
+//!    ones pass the occupancy pre-check, are diffused in one batch and verified (a
+//!    failing one a second time with the visible prior); the verified candidate
+//!    with the lowest mean cell fit is chosen.
 
 use super::generate::{
-    diffuse_and_verify, finish, fit_score, lay_out, fit_score_cells, fit_score_scaled, limit_fit, polycube_samples, precheck, prepare_input, without_fit_limit, Candidate, OrientationSearch,
+    diffuse_and_verify, finish, lay_out, fit_score_cells, fit_score_scaled, limit_fit, polycube_samples, precheck, worst_and_mean, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
 use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
@@ -417,35 +419,46 @@ pub fn generate_auto(
         // on a coarse fit first was tried and lost a complex part's true solid:
         // BENCHMARKS.md "Global fits in parallel".)
         use rayon::prelude::*;
-        cands.par_iter_mut().for_each(|(ctx, f)| *f = fit_score(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES)));
+        //
+        // Each candidate keeps its worst cell's fit (the fit limits apply to it) and
+        // the box's candidates are ordered by the mean cell fit, the ranking score of
+        // `Candidate::score`: the worst cell ties candidates that differ in better-
+        // fitting cells, and which of them made the `max_global` cut was arbitrary
+        // (BENCHMARKS.md "Ranking verified candidates by the mean cell fit").
+        let fits: Vec<(f64, f64)> = cands.par_iter().map(|(ctx, _)| worst_and_mean(&fit_score_cells(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES), [1.0; 3]))).collect();
+        let mut keyed: Vec<((Context, f64), f64)> = cands.drain(..).zip(fits).map(|((ctx, _), (worst, mean))| ((ctx, worst), mean)).collect();
         if aopts.joint_labels {
             if let Some((cells, lists)) = &joint_lists[bi] {
                 let found = joint_labels(fit_sub, cells, lists, input_genus, JOINT_SWEEPS);
-                let before = cands.len();
-                for (ctx, f) in found {
+                let before = keyed.len();
+                for (ctx, _) in found {
                     joint_found[bi].insert(ctx.labels);
-                    if !cands.iter().any(|(c, _)| c.labels == ctx.labels) {
-                        cands.push((ctx, f));
+                    if !keyed.iter().any(|((c, _), _)| c.labels == ctx.labels) {
+                        let (worst, mean) = worst_and_mean(&fit_score_cells(fit_sub, &ctx, AxisRotation::IDENTITY, &polycube_samples(&ctx, FIT_SAMPLES), [1.0; 3]));
+                        keyed.push(((ctx, worst), mean));
                     }
                 }
-                report.boxes[bi].joint_candidates = cands.len() - before;
-                if cands.len() > before {
+                report.boxes[bi].joint_candidates = keyed.len() - before;
+                if keyed.len() > before {
                     report.boxes[bi].refused = None;
                 }
             }
         }
-        cands.sort_by(|a, b| a.1.total_cmp(&b.1));
-        report.boxes[bi].best_fit = cands.first().map(|c| c.1);
         // Boxes are compared in a common unit: the best of the box's few best-fitting
-        // candidates, measured with the box's cell widths scaled to that unit.
+        // candidates (worst cell), measured with the box's cell widths scaled to that unit.
+        keyed.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1));
+        report.boxes[bi].best_fit = keyed.first().map(|c| c.0 .1);
         let scale = box_scale(bb.size(), report.boxes[bi].dims);
-        report.boxes[bi].best_fit_common = cands
+        report.boxes[bi].best_fit_common = keyed
             .iter()
             .take(aopts.local_keep.max(1) * 2)
-            .map(|(ctx, _)| fit_score_scaled(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES), scale))
+            .map(|((ctx, _), _)| fit_score_scaled(fit_sub, ctx, AxisRotation::IDENTITY, &polycube_samples(ctx, FIT_SAMPLES), scale))
             .min_by(f64::total_cmp);
+        // then the box's candidates in ranking order (stable: worst cell among equals)
+        keyed.sort_by(|a, b| a.1.total_cmp(&b.1));
+        cands.extend(keyed.into_iter().map(|(c, _)| c));
     }
-    let best_overall = per_box.iter().filter_map(|c| c.first().map(|x| x.1)).fold(f64::INFINITY, f64::min);
+    let best_overall = report.boxes.iter().filter_map(|b| b.best_fit).fold(f64::INFINITY, f64::min);
     let common = |bi: usize| report.boxes[bi].best_fit_common.unwrap_or(f64::INFINITY);
     let mut order: Vec<usize> = Vec::new();
     for (bi, cands) in per_box.iter().enumerate() {
@@ -841,6 +854,7 @@ pub fn suggest_ratios(vol: &VoxelVolume, lo: [f64; 3], hi: [f64; 3]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::context::generate::fit_score;
 
     /// A closed box [0, a] x [0, b] x [0, c], 12 outward triangles.
     fn box_mesh(a: f64, b: f64, c: f64) -> TriMesh {

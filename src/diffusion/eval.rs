@@ -29,6 +29,9 @@ pub struct EvalSummary {
     pub precheck_passed: usize,
     pub gocc_passed: usize,
     pub tcv_passed: usize,
+    /// Of those, verified by the second diffusion with the visible prior
+    /// (`PolycubeOptions::visible_retry`).
+    pub tcv_passed_on_retry: usize,
     /// Cases whose aligned input itself (the tensor before any noise) passes GOCC and
     /// TCV under the true context: what a denoiser that only kept the input would
     /// score, the reference for the threshold.
@@ -96,6 +99,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         }
         if c.stage == Stage::Verified {
             s.tcv_passed += 1;
+            s.tcv_passed_on_retry += c.visible_retry as usize;
         } else {
             let why = c.report.as_ref().and_then(|r| r.reason.clone()).unwrap_or_else(|| format!("pre-check: {:.1}% in empty cells", 100.0 * c.occupancy.in_empty_cells));
             s.failures.push(format!("case {i} {ctx}: {why}"));
@@ -110,9 +114,10 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
         }
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
             let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
-            // the exact polycube's surface per cell: with the visible prior the output
-            // carries no shared faces, and neither does the assembled surface
-            let exact = if opts.sampler.visible_prior {
+            // the exact polycube's surface per cell: with the visible prior (asked for,
+            // or the retry's) the output carries no shared faces, and neither does the
+            // assembled surface
+            let exact = if opts.sampler.visible_prior || c.visible_retry {
                 crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
             } else {
                 sample_cells(&ctx, 1.0, &mut rng)
