@@ -1,7 +1,8 @@
 //! Mesh one input with a fixed context under hex-option variants and print the
 //! quality of each (issue 6 experiments):
 //! `cargo run --release --example hex_probe -- MESH LABELS [release_distance ...]`
-//! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone.
+//! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
+//! (`HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -19,6 +20,8 @@ fn main() -> sddpm::Result<()> {
         if let Some(r) = a.get(3).and_then(|s| s.parse().ok()) {
             opts.voxel_refinements = r; // e.g. voxel48 0: that lattice only
         }
+        // HEX_PIN=F: the coverage step at F times the Hausdorff goal (HexOptions::pin_uncovered)
+        opts.pin_uncovered = std::env::var("HEX_PIN").ok().and_then(|s| s.parse().ok()).unwrap_or(0.0);
         let t = std::time::Instant::now();
         let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut sddpm::error::NoProgress)?;
         let q = &r.quality;

@@ -14,6 +14,7 @@ use super::quality::{scaled_jacobian, DEGENERATE};
 use super::surface::Surface;
 use super::topology::Csr;
 use super::HexMesh;
+use rayon::prelude::*;
 use crate::geometry::vec3::*;
 
 /// A mesh being improved, with what ties its nodes to the input.
@@ -455,6 +456,133 @@ pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: u
         w.attach[v] = tri;
     }
     st.residual_before_snap = maxres / diag;
+    st
+}
+
+/// What [`cover_uncovered_vertices`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct CoverStats {
+    /// Input vertices farther than the tolerance from the boundary.
+    pub uncovered: usize,
+    /// Of those, the ones a boundary node reached and now stays on.
+    pub pinned: usize,
+    pub rounds: usize,
+    pub moves_accepted: usize,
+}
+
+/// Pin boundary nodes to the input vertices the mesh boundary misses.
+///
+/// The fit pulls every boundary node onto its nearest surface point, which bounds
+/// the distance from the mesh to the surface but not back: a rim or a thin lip
+/// that no node is nearest to stays uncovered (cgal_spool's recessed end). Every
+/// input vertex farther than `tol` from the boundary (as four triangles per quad)
+/// gets, farthest first, its nearest free boundary node (one node per vertex),
+/// which is pulled towards it over `rounds` rounds in steps that keep every element
+/// valid and no worse than min(before, `floor`) (interior nodes smoothed between
+/// rounds). A node that reaches its vertex becomes `Role::Corner` of it, so the
+/// later stages keep it there; one that does not goes back onto the surface where
+/// it stands (when that keeps its elements valid) and stays free.
+pub fn cover_uncovered_vertices(w: &mut Work, sw: &Surface, tol: f64, rounds: usize, floor: f64) -> CoverStats {
+    let mut st = CoverStats::default();
+    let hb = super::distance::boundary_trimesh(&w.mesh);
+    if hb.triangles.is_empty() {
+        return st;
+    }
+    let loc = crate::geometry::SurfaceLocator::new(&hb);
+    let mut far: Vec<(f64, usize)> = sw.mesh.vertices.par_iter().enumerate().map(|(i, &p)| (loc.closest(p).2, i)).filter(|&(d, _)| d > tol).collect();
+    far.sort_by(|a, b| b.0.total_cmp(&a.0));
+    st.uncovered = far.len();
+    let free: Vec<usize> = (0..w.mesh.nodes.len()).filter(|&v| w.role[v] == Role::Free).collect();
+    // outward normals of the boundary nodes and of the input's vertices (every
+    // incident triangle's): a node is pulled only to a vertex on a side of the
+    // input facing like it, never across a thin part to the far side
+    let bq: Vec<[u32; 4]> = super::topology::boundary_quads(&w.mesh).unwrap_or_default().into_iter().map(|q| q.nodes).collect();
+    let node_n = super::map::quad_normals(w.mesh.nodes.len(), &bq, &w.mesh.nodes);
+    let mut vert_tris: Vec<Vec<u32>> = vec![Vec::new(); sw.mesh.vertices.len()];
+    for (t, tri) in sw.mesh.triangles.iter().enumerate() {
+        for &i in tri {
+            vert_tris[i as usize].push(t as u32);
+        }
+    }
+    let facing = |v: usize, i: usize| {
+        let n = node_n[v];
+        let l = norm(n);
+        l > 0.0 && vert_tris[i].iter().any(|&t| dot(sw.normal(t), n) > 0.5 * l)
+    };
+    let mut taken = std::collections::HashSet::new();
+    let mut pins: Vec<(usize, usize)> = Vec::new(); // (node, input vertex)
+    for (_, i) in far {
+        let p = sw.mesh.vertices[i];
+        let best = free
+            .iter()
+            .filter(|v| !taken.contains(*v) && facing(**v, i))
+            .map(|&v| (dist2(w.mesh.nodes[v], p), v))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, v)) = best {
+            taken.insert(v);
+            pins.push((v, i));
+        }
+    }
+    if pins.is_empty() {
+        return st;
+    }
+    // the pinned nodes leave the surface on their way: no projection for them meanwhile
+    for &(v, i) in &pins {
+        w.role[v] = Role::Corner(i as u32);
+    }
+    let start: Vec<[f64; 3]> = pins.iter().map(|&(v, _)| w.mesh.nodes[v]).collect();
+    let start_attach: Vec<u32> = pins.iter().map(|&(v, _)| w.attach[v]).collect();
+    let reach = 1e-3 * tol;
+    for r in 0..rounds {
+        st.rounds += 1;
+        let alpha = ((r + 1) as f64 / rounds as f64).min(1.0);
+        let mut moving = false;
+        for &(v, i) in &pins {
+            let x = w.mesh.nodes[v];
+            let d = sub(sw.mesh.vertices[i], x);
+            if norm(d) <= reach {
+                continue;
+            }
+            moving = true;
+            let before = local_eval(w, v as u32, x);
+            for k in 0..4 {
+                let y = add(x, scale(d, alpha * 0.5f64.powi(k)));
+                let after = local_eval(w, v as u32, y);
+                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
+                    w.mesh.nodes[v] = y;
+                    st.moves_accepted += 1;
+                    break;
+                }
+            }
+        }
+        if !moving {
+            break;
+        }
+        smooth_nodes(w, sw, 2, floor, true);
+        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
+    }
+    for (k, &(v, i)) in pins.iter().enumerate() {
+        let x = w.mesh.nodes[v];
+        if norm(sub(sw.mesh.vertices[i], x)) <= reach {
+            w.mesh.nodes[v] = sw.mesh.vertices[i];
+            w.attach[v] = u32::MAX;
+            st.pinned += 1;
+            continue;
+        }
+        // not reached: back where it started on the surface if that keeps its
+        // elements valid, else onto the surface where it stands
+        w.role[v] = Role::Free;
+        let before = local_eval(w, v as u32, x);
+        let (q, t, _) = sw.closest(x);
+        for (y, a) in [(start[k], start_attach[k]), (q, t)] {
+            let after = local_eval(w, v as u32, y);
+            if after.1 <= before.1 && after.0 >= before.0.min(floor) {
+                w.mesh.nodes[v] = y;
+                w.attach[v] = a;
+                break;
+            }
+        }
+    }
     st
 }
 

@@ -305,6 +305,29 @@ mod tests {
     }
 
     #[test]
+    fn the_coverage_step_brings_a_missed_rim_closer_and_keeps_the_mesh_valid() {
+        // cgal_spool's recessed end: a lip thinner than a voxel at 24 voxels, whose
+        // rim no boundary node is nearest to (BENCHMARKS.md "Coverage")
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/cgal_spool.off");
+        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
+        let mut opts = HexOptions { voxel_refinements: 0, ..Default::default() };
+        let plain = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
+        assert!(plain.stages.iter().all(|s| s.stage != "coverage"), "off by default");
+        opts.pin_uncovered = 0.6;
+        let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
+        let st = r.stages.iter().find(|s| s.stage == "coverage").expect("a coverage stage");
+        let d = &st.details;
+        assert!(d["uncovered"].as_u64().unwrap() > 0 && d["pinned"].as_u64().unwrap() > 0, "{d}");
+        assert_eq!(d["kept"], serde_json::json!(true), "{d}");
+        // the step is kept only when it lowers the distance it measured, and the
+        // finished mesh is closer to the input than the one without it
+        assert!(d["hausdorff_relative_after"].as_f64().unwrap() < d["hausdorff_relative_before"].as_f64().unwrap(), "{d}");
+        assert!(r.hausdorff_relative < plain.hausdorff_relative, "{} vs {}", r.hausdorff_relative, plain.hausdorff_relative);
+        assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
+        assert!(st.after.inverted == 0 && st.after.min > 0.0, "{:?}", st.after);
+    }
+
+    #[test]
     fn a_torus_gets_a_valid_voxel_mesh_of_genus_one() {
         let torus = crate::mesh::tests::square_torus();
         let r = build_voxel_hex_mesh(&torus, &Affine::similarity(1.0, [0.0; 3]), 1, &HexOptions::default(), &mut crate::error::NoProgress).unwrap();
