@@ -2,7 +2,8 @@
 //! quality of each (issue 6 experiments):
 //! `cargo run --release --example hex_probe -- MESH LABELS [release_distance ...]`
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
-//! (`HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal).
+//! (`HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -22,6 +23,10 @@ fn main() -> sddpm::Result<()> {
         }
         // HEX_PIN=F: the coverage step at F times the Hausdorff goal (HexOptions::pin_uncovered)
         opts.pin_uncovered = std::env::var("HEX_PIN").ok().and_then(|s| s.parse().ok()).unwrap_or(0.0);
+        // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
+        if let Some(g) = std::env::var("HEX_HAUSDORFF").ok().and_then(|s| s.parse().ok()) {
+            opts.goals.hausdorff = g;
+        }
         let t = std::time::Instant::now();
         let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut sddpm::error::NoProgress)?;
         let q = &r.quality;
@@ -29,6 +34,9 @@ fn main() -> sddpm::Result<()> {
             "{}: elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} volume {:.4} vs {:.4} ({:.1} s)",
             r.domain, q.elements, q.inverted, q.min, q.mean, r.hausdorff_relative, r.volume, r.input_volume, t.elapsed().as_secs_f64()
         );
+        if let Some(l) = r.stages.first().map(|s| &s.details["lattices_meshed"]) {
+            println!("   lattices meshed: {l}");
+        }
         for s in &r.stages {
             println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {:.1} s {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.seconds, s.details.to_string().chars().take(300).collect::<String>());
         }
