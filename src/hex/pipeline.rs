@@ -133,9 +133,9 @@ pub struct HexOptions {
     pub voxel_resolution: usize,
     /// Finer lattices the fallback may try after its first when the mesh misses
     /// [`HexOptions::goals`] (default 2; each within `max_elements`); when one
-    /// meets the goals, up to two more bisect between it and the coarser lattice
-    /// that missed (a coarser one is kept when it meets them too). 0: the first
-    /// lattice only.
+    /// meets the goals with room to spare, one more at the coarser resolution
+    /// predicted to just meet the distance goal (kept when it meets every goal).
+    /// 0: the first lattice only.
     pub voxel_refinements: usize,
     /// The quality a mesh should reach (issue 6's goals). Meshes are ranked by
     /// inverted elements, then by how many goals they miss, then by minimum scaled
