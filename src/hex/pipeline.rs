@@ -651,6 +651,11 @@ fn pass_reporter<'a, P: Progress + ?Sized>(progress: &'a mut P, lo: f64, span: f
 /// pillowing, smoothing, optimisation, the release of folded boundary nodes, the
 /// Hausdorff distance, and the mesh back in user coordinates.
 #[allow(clippy::too_many_arguments)]
+/// The report of a quality step that started at `t0` from `before` and left `mesh`.
+fn stage_report(stage: &str, before: QualitySummary, mesh: &HexMesh, t0: Instant, details: serde_json::Value) -> StageReport {
+    StageReport { stage: stage.into(), before, after: summary(mesh), nodes: mesh.nodes.len(), elements: mesh.elements.len(), seconds: t0.elapsed().as_secs_f64(), details }
+}
+
 pub(crate) fn finish(
     lv: Level,
     targets: Vec<[f64; 3]>,
@@ -701,15 +706,7 @@ pub(crate) fn finish(
         let t0 = Instant::now();
         let before = q_mapped;
         let rep: PillowReport = pillow(&mut work)?;
-        stages.push(StageReport {
-            stage: "pillowing".into(),
-            before,
-            after: summary(&work.mesh),
-            nodes: work.mesh.nodes.len(),
-            elements: work.mesh.elements.len(),
-            seconds: t0.elapsed().as_secs_f64(),
-            details: serde_json::to_value(&rep).unwrap_or_default(),
-        });
+        stages.push(stage_report("pillowing", before, &work.mesh, t0, serde_json::to_value(&rep).unwrap_or_default()));
     }
 
     // ---- smoothing: mean-ratio energy of the corners (untangles, then evens out) ----
@@ -717,15 +714,7 @@ pub(crate) fn finish(
     let t0 = Instant::now();
     let before = summary(&work.mesh);
     let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
-    stages.push(StageReport {
-        stage: "smoothing".into(),
-        before,
-        after: summary(&work.mesh),
-        nodes: work.mesh.nodes.len(),
-        elements: work.mesh.elements.len(),
-        seconds: t0.elapsed().as_secs_f64(),
-        details: serde_json::to_value(st).unwrap_or_default(),
-    });
+    stages.push(stage_report("smoothing", before, &work.mesh, t0, serde_json::to_value(st).unwrap_or_default()));
 
     // ---- coverage: boundary nodes pinned to the input vertices the boundary misses ----
     // kept only when it brings the boundary closer to the input (two-sided
@@ -751,15 +740,7 @@ pub(crate) fn finish(
                 d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
                 d.insert("kept".into(), serde_json::json!(kept));
             }
-            stages.push(StageReport {
-                stage: "coverage".into(),
-                before,
-                after: summary(&work.mesh),
-                nodes: work.mesh.nodes.len(),
-                elements: work.mesh.elements.len(),
-                seconds: t0.elapsed().as_secs_f64(),
-                details,
-            });
+            stages.push(stage_report("coverage", before, &work.mesh, t0, details));
         }
     }
 
@@ -828,15 +809,7 @@ pub(crate) fn finish(
         }
     }
     let q_final = summary(&work.mesh);
-    stages.push(StageReport {
-        stage: "optimisation".into(),
-        before,
-        after: q_final,
-        nodes: work.mesh.nodes.len(),
-        elements: work.mesh.elements.len(),
-        seconds: t0.elapsed().as_secs_f64(),
-        details: serde_json::json!({ "moves": st, "mean_ascent": ascent, "mean_before_ascent": mean_before_ascent, "released_boundary_nodes": released_nodes }),
-    });
+    stages.push(stage_report("optimisation", before, &work.mesh, t0, serde_json::json!({ "moves": st, "mean_ascent": ascent, "mean_before_ascent": mean_before_ascent, "released_boundary_nodes": released_nodes })));
 
     // ---- never worse than the mapped mesh ----
     let mut mapped_u = mapped.clone();
