@@ -122,8 +122,9 @@ pub const VOXEL_MAX_RESOLUTION: usize = 192;
 /// `opts.voxel_resolution` (doubling) with the input's topology; while the mesh
 /// misses `opts.goals`, up to `opts.voxel_refinements` finer lattices follow, each
 /// finer by the ratio of the measured Hausdorff distance to its goal (1.25x to 2x),
-/// within `opts.max_elements`, as long as each ranks better than the one before by
-/// [`super::QualityGoals::rank`]; when the best meets every goal with room to
+/// within `opts.max_elements`, as long as each ranks better than the best before by
+/// [`super::QualityGoals::rank`] (one that ranks worse and misses the distance goal
+/// too gets one more lattice, 1.5x finer than it); when the best meets every goal with room to
 /// spare and a coarser lattice missed the distance goal, one coarser resolution
 /// predicted from the two is meshed and kept when it meets every goal too (fewer
 /// elements). The best mesh is returned (its details list
@@ -162,16 +163,26 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     let mut best = mesh_lattice(lattice, res, &fr, opts, t_all, &mut sub)?;
     let mut best_res = res;
     let mut meshed = vec![(res, best.quality.elements, best.quality.min, best.quality.mean, best.hausdorff_relative)];
+    // the lattice the next step starts from: the best so far, or the finer one that
+    // ranked worse while missing the distance goal too
+    let mut from = (res, best.hausdorff_relative);
+    let mut after_worse = false;
     for k in 1..=opts.voxel_refinements {
-        let last = meshed[meshed.len() - 1]; // the best so far: a worse one ends the loop
-        if opts.goals.missed(&best) == 0 || last.0 >= VOXEL_MAX_RESOLUTION {
+        if opts.goals.missed(&best) == 0 || from.0 >= VOXEL_MAX_RESOLUTION {
             break;
         }
-        // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
-        // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
-        let ratio = 1.1 * last.4 / opts.goals.hausdorff; // NaN for a NaN goal or distance
-        let factor = if ratio.is_nan() { 2.0 } else { ratio.clamp(1.25, 2.0) };
-        let mut next = ((last.0 as f64 * factor).ceil() as usize).min(VOXEL_MAX_RESOLUTION);
+        let mut next = if after_worse {
+            // the finer lattice still cut a feature thinner than its voxels: a
+            // smaller step than the distance would ask for (its mesh is not valid)
+            (from.0 as f64 * 1.5).ceil() as usize
+        } else {
+            // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
+            // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
+            let ratio = 1.1 * from.1 / opts.goals.hausdorff; // NaN for a NaN goal or distance
+            let factor = if ratio.is_nan() { 2.0 } else { ratio.clamp(1.25, 2.0) };
+            (from.0 as f64 * factor).ceil() as usize
+        }
+        .min(VOXEL_MAX_RESOLUTION);
         // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
         // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
         let lattice = loop {
@@ -186,10 +197,21 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         let r = mesh_lattice(lattice, next, &fr, opts, t_all, &mut sub)?;
         meshed.push((next, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
         if !opts.goals.beats(&r, Some(&best)) {
-            // finer ranked worse (spool: 24 valid, 48 with 6 inverted elements):
-            // a still finer lattice costs 2-8x more and is no surer to help
-            break;
+            // finer ranked worse. When it misses the distance goal as well, a wall
+            // thinner than its voxels is still cut (cgal_spool's lip, 0.011-0.026
+            // thick: a quarter of a 24-voxel lattice's voxel, half of a 48's, whose
+            // mesh folds there; 72 voxels meet every goal): one more lattice, 1.5x
+            // finer. Otherwise, or after a second worse one, stop: a still finer
+            // lattice costs 2-8x more and is no surer to help.
+            if after_worse || !(r.hausdorff_relative > opts.goals.hausdorff) {
+                break;
+            }
+            after_worse = true;
+            from = (next, r.hausdorff_relative);
+            continue;
         }
+        after_worse = false;
+        from = (next, r.hausdorff_relative);
         best = r;
         best_res = next;
     }
@@ -355,6 +377,29 @@ mod tests {
         assert!(r.hausdorff_relative < plain.hausdorff_relative, "{} vs {}", r.hausdorff_relative, plain.hausdorff_relative);
         assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
         assert!(st.after.inverted == 0 && st.after.min > 0.0, "{:?}", st.after);
+    }
+
+    #[test]
+    fn a_lip_thinner_than_the_voxels_gets_a_finer_lattice_after_one_that_folds() {
+        // cgal_spool's recessed end: a lip 0.011-0.026 thick is cut at 24 voxels
+        // (valid, 2.44 %) and folds at 48 (ranks worse, still 2.2 % away); the
+        // fallback goes on to 1.5 x 48 = 72 voxels, which meet every goal
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/cgal_spool.off");
+        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
+        let opts = HexOptions::default();
+        let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
+        let meshed = r.stages[0].details["lattices_meshed"].as_array().unwrap().clone();
+        let res: Vec<u64> = meshed.iter().map(|m| m["resolution"].as_u64().unwrap()).collect();
+        assert_eq!(res, vec![24, 48, 72], "{meshed:?}");
+        let h = |i: usize| meshed[i]["hausdorff_relative"].as_f64().unwrap();
+        assert!(h(0) > opts.goals.hausdorff && h(1) > opts.goals.hausdorff, "{meshed:?}");
+        assert!(meshed[1]["min_scaled_jacobian"].as_f64().unwrap() < meshed[0]["min_scaled_jacobian"].as_f64().unwrap(), "{meshed:?}");
+        assert_eq!(r.domain, "voxel 72");
+        assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
+        assert_eq!(r.quality.inverted, 0);
+        // the volume of the solid within 1 % (the lip and the recess are kept)
+        let v = mesh.signed_volume();
+        assert!((r.volume - v).abs() < 0.01 * v, "{} vs {v}", r.volume);
     }
 
     #[test]
