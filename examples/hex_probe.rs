@@ -2,7 +2,8 @@
 //! quality of each (issue 6 experiments):
 //! `cargo run --release --example hex_probe -- MESH LABELS [release_distance ...]`
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
-//! (`HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
+//! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
+//! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
 //! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
@@ -49,6 +50,8 @@ fn main() -> sddpm::Result<()> {
     for rd in if variants.is_empty() { vec![0.002] } else { variants } {
         let mut o = RunOptions { spline: None, hex_candidates: 1, ..Default::default() };
         o.hex.release_distance = rd;
+        // HEX_NO_VOXEL=1: the polycube mesh alone, without the grid-based fallback
+        o.hex.voxel_fallback = std::env::var("HEX_NO_VOXEL").map_or(true, |v| v != "1");
         let t = std::time::Instant::now();
         let r = run(&model, &mesh, genus, &ContextRequest::Contexts(vec![ctx]), &o, &mut sddpm::error::NoProgress)?;
         let q = &r.hex.quality;
@@ -59,6 +62,7 @@ fn main() -> sddpm::Result<()> {
         for s in &r.hex.stages {
             println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.details);
         }
+        sddpm::export::vtk::write_vtk_legacy(std::path::Path::new("/tmp/voxel_probe.vtk"), &r.hex.mesh, "hex", &[("scaled_jacobian", &r.hex.scaled_jacobian)]).ok();
     }
     Ok(())
 }
