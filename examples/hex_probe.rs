@@ -38,6 +38,11 @@ fn main() -> sddpm::Result<()> {
         if let Some(l) = r.stages.first().map(|s| &s.details["lattices_meshed"]) {
             println!("   lattices meshed: {l}");
         }
+        if let Some(t) = r.stages.first().and_then(|s| s.details["resolutions_tried"].as_array()) {
+            for line in t {
+                println!("   tried {}", line.as_str().unwrap_or_default());
+            }
+        }
         for s in &r.stages {
             println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {:.1} s {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.seconds, s.details.to_string().chars().take(300).collect::<String>());
         }
