@@ -37,21 +37,25 @@ fn tiny_model(dir: &std::path::Path) -> Model {
 fn a_tiny_model_overfits_a_handful_of_samples() {
     let dir = tempdir("overfit");
     let out = dir.join("tiny.sddpmw");
-    train(&tiny_config(), &out, None, &mut |_| true).unwrap();
+    let cfg = TrainConfig { epochs: 300, ..tiny_config() };
+    train(&cfg, &out, None, &mut |_| true).unwrap();
     let log = read_loss_csv(&sddpm::diffusion::train::checkpoint_dir_for(&out).join("loss.csv")).unwrap();
     let losses: Vec<f64> = log.iter().map(|r| r.2).collect();
     eprintln!("logged losses: {losses:?}");
     let first = losses[0];
     let tail = &losses[losses.len() - 5..];
     let last = tail.iter().sum::<f64>() / tail.len() as f64;
-    // 150 steps on one batch of 4: the noise-prediction loss of a fresh network is
+    // 300 steps on one batch of 4: the noise-prediction loss of a fresh network is
     // about 1 (it predicts unit-variance noise from scratch). Four samples with
     // distinct contexts can be memorised, after which the noise is recoverable from
     // x_t at most timesteps, so the loss must fall well below. Each logged value is
     // the mean of 10 steps with random timesteps, whose spread is large (the
     // per-timestep error ranges from ~0.001 at t = 500 to ~0.6 at t = 2, see
     // BENCHMARKS.md); the mean of the last five logged windows (50 steps) is compared,
-    // and a factor of 3 below the fresh network is required.
+    // and a factor of 3 below the fresh network is required. (At 150 steps the
+    // ratio was 3.0-3.3 from run to run: the flex backend's threaded reductions make
+    // the trajectory depend on what else runs, and one CI run missed by 0.2 %; at
+    // 300 steps it is 4.6.)
     assert!(last < first / 3.0, "loss {first} -> {last} (mean of the last 5 windows)");
 }
 

@@ -141,12 +141,32 @@ pub fn load_net(cfg: &ModelConfig, record: &[u8], device: &Device) -> Result<Den
 /// parameters (a warm start of a larger architecture: those keep their
 /// initialisation).
 pub fn load_net_with(cfg: &ModelConfig, record: &[u8], device: &Device, partial: bool) -> Result<Denoiser> {
+    load_net_seeded(cfg, record, device, partial, None)
+}
+
+/// A freshly initialised network, its weights drawn from burn's process-wide
+/// generator (seeded first when `seed` is given). Every construction takes one lock,
+/// so that a seeded initialisation (training from a seed) is not interleaved with
+/// the draws of another thread's construction (a model loaded concurrently, tests
+/// run in parallel): the same seed gives the same weights.
+pub(crate) fn fresh_net(cfg: &ModelConfig, device: &Device, seed: Option<u64>) -> Denoiser {
+    static INIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(s) = seed {
+        device.seed(s);
+    }
+    Denoiser::new(cfg, device)
+}
+
+/// As [`load_net_with`], the parameters missing from a partial record initialised
+/// from `seed`.
+pub(crate) fn load_net_seeded(cfg: &ModelConfig, record: &[u8], device: &Device, partial: bool, seed: Option<u64>) -> Result<Denoiser> {
     let bytes = burn::tensor::Bytes::from_bytes_vec(record.to_vec());
     // Parsing foreign bytes must never take the process down: catch a panic in the decoder.
     let rec = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| burn::store::ModuleRecord::from_bytes(bytes)))
         .map_err(|_| Error::Model("the parameter record is corrupt".into()))?
         .map_err(|e| Error::Model(format!("the parameter record cannot be read: {e:?}")))?;
-    let net = Denoiser::new(cfg, device);
+    let net = fresh_net(cfg, device, seed);
     let rec = rec.cast_to_module_dtype().allow_partial(partial);
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| net.try_load_record(rec)))
         .map_err(|_| Error::Model("the parameter record does not match the architecture".into()))?

@@ -207,17 +207,12 @@ pub fn train(
                 None => None,
             };
             cfg = c;
-            // burn's seed is one process-wide generator: hold a lock from seeding to the
-            // end of the initialisation so that concurrent trainings (tests run in
-            // parallel, a library caller's threads) cannot interleave their draws
-            static INIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
-            let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
-            ad.seed(cfg.seed);
+            // burn's seed is one process-wide generator: the seeded construction
+            // holds the lock every construction takes (super::fresh_net)
             net = match &init {
-                Some(rec) => super::load_net_with(&cfg.model, rec, &ad, warm_partial)?,
-                None => Denoiser::new(&cfg.model, &ad),
+                Some(rec) => super::load_net_seeded(&cfg.model, rec, &ad, warm_partial, Some(cfg.seed))?,
+                None => super::fresh_net(&cfg.model, &ad, Some(cfg.seed)),
             };
-            drop(_guard);
             opt = adam();
             epoch0 = 0;
             step = 0;
