@@ -7,8 +7,8 @@
 //! boundary is a 2-manifold), and the resolution is doubled until the voxel solid
 //! has the input's topology (one component, no cavity, the input's genus; a solid
 //! in one piece with extra tunnels, where a wall thinner than a voxel passes
-//! between the voxel centres, first gets the voxels that wall fills in part,
-//! [`crate::context::volume::solid_fractions`]). The
+//! between the voxel centres, first gets the voxels that are mostly or partly
+//! inside, [`crate::context::volume::solid_fractions`]). The
 //! voxels become the hex elements; their boundary nodes are pulled onto the input
 //! surface in validity-preserving steps (as the polycube map's nodes are), and the
 //! usual quality steps follow: pillowing (which gives every boundary element one
@@ -272,8 +272,10 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
     if b0 == 1 && b2 == 0 && b1 > genus {
         // One piece with extra tunnels: a wall thinner than a voxel passes between
         // the voxel centres and leaves holes in the voxel solid (hexgen_joint: genus
-        // 2 at 24 voxels, 5 at 48, for 1). Add the voxels the wall fills in part,
-        // the fullest first, until the topology is the input's. A solid in pieces
+        // 2 at 24 voxels, 5 at 48, for 1). Add every voxel at least 0.375, then
+        // 0.25, then 0.125 full (the wall's among them; elsewhere these only thicken
+        // the staircase by part-full voxels, which the fit pulls back onto the
+        // surface) until the topology is the input's. A solid in pieces
         // (trimesh_round's tube wall below 188 voxels) is too coarse as a whole:
         // filling would make a wall of squeezed one-voxel elements; it is refined.
         let frac = crate::context::volume::solid_fractions(mesh, &vol, 4);
