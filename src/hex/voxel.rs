@@ -255,19 +255,28 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     Ok(best)
 }
 
+/// A lattice with the input's topology: its voxels, how many were filled to make it
+/// well-composed, and, when a porous thin wall was repaired, how many voxels were
+/// added and the least solid fraction they have.
+struct Lattice {
+    vol: crate::context::volume::VoxelVolume,
+    filled: usize,
+    thin_wall: Option<(usize, f32)>,
+}
+
 /// A voxel lattice of the working-frame surface at `res` voxels along the longest
 /// edge, made well-composed: Some when it has the input's topology within the
 /// element budget. The bool says whether a finer lattice could still fit the budget.
-fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<(crate::context::volume::VoxelVolume, usize)>, bool)> {
+fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<Lattice>, bool)> {
     let mut vol = voxelize(mesh, res)?;
     let centre_occ = vol.grid.occ.clone();
-    let mut filled = make_well_composed(&mut vol.grid);
+    let filled = make_well_composed(&mut vol.grid);
     let (b0, b2, b1) = betti(&vol.grid);
     let n = vol.grid.count();
     tried.push(format!("{res}: {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
     let fits = n * 8 <= opts.max_elements;
     if b0 == 1 && b2 == 0 && b1 == genus && n <= opts.max_elements {
-        return Ok((Some((vol, filled)), fits));
+        return Ok((Some(Lattice { vol, filled, thin_wall: None }), fits));
     }
     if b0 == 1 && b2 == 0 && b1 > genus {
         // One piece with extra tunnels: a wall thinner than a voxel passes between
@@ -289,8 +298,7 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
             tried.push(format!("{res} with voxels >= {tau} solid (+{added}): {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
             if b0 == 1 && b2 == 0 && b1 == genus && n <= opts.max_elements {
                 vol.grid = g;
-                filled = f2;
-                return Ok((Some((vol, filled)), n * 8 <= opts.max_elements));
+                return Ok((Some(Lattice { vol, filled: f2, thin_wall: Some((added, tau)) }), n * 8 <= opts.max_elements));
             }
         }
     }
@@ -300,7 +308,7 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
 /// The hex mesh of one lattice: boundary nodes onto the surface, then the usual
 /// quality steps ([`finish`]).
 fn mesh_lattice(
-    (vol, filled): (crate::context::volume::VoxelVolume, usize),
+    Lattice { vol, filled, thin_wall }: Lattice,
     res: usize,
     fr: &super::pipeline::Frames,
     opts: &HexOptions,
@@ -351,6 +359,11 @@ fn mesh_lattice(
     };
     let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads };
     let details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats });
+    let mut details = details;
+    if let Some((added, tau)) = thin_wall {
+        // the lattice was repaired for a porous thin wall (topology_lattice)
+        details["voxels_added_for_thin_walls"] = serde_json::json!({ "voxels": added, "min_solid_fraction": tau });
+    }
     let mut r = finish(lv, vec![[vol.h; 3]; ne], smap, levels, details, fr, opts, t_all, progress)?;
     r.domain = format!("voxel {res}");
     Ok(r)
@@ -417,7 +430,8 @@ mod tests {
         let opts = HexOptions { voxel_refinements: 0, ..Default::default() };
         let mut tried = Vec::new();
         let (lattice, _) = topology_lattice(&mesh, 24, 1, &opts, &mut tried).unwrap();
-        let (vol, _) = lattice.expect("a lattice of genus 1");
+        let Lattice { vol, thin_wall, .. } = lattice.expect("a lattice of genus 1");
+        assert!(thin_wall.is_some_and(|(n, tau)| n > 0 && tau > 0.0), "{tried:?}");
         assert_eq!(betti(&vol.grid), (1, 0, 1), "{tried:?}");
         assert!(tried[0].ends_with("genus 2") && tried.iter().any(|t| t.contains("solid (+")), "{tried:?}");
         // every voxel whose centre is inside is kept
@@ -427,6 +441,9 @@ mod tests {
         assert_eq!(r.domain, "voxel 24");
         assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
         assert!(r.quality.min > 0.2, "{:?}", r.quality);
+        // the report says so
+        let d = &r.stages[0].details["voxels_added_for_thin_walls"];
+        assert!(d["voxels"].as_u64().unwrap() > 0 && d["min_solid_fraction"].as_f64().unwrap() > 0.0, "{d}");
     }
 
     #[test]
