@@ -288,10 +288,10 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
         // (trimesh_round's tube wall below 188 voxels) is too coarse as a whole:
         // filling would make a wall of squeezed one-voxel elements; it is refined.
         let frac = crate::context::volume::solid_fractions(mesh, &vol, 4);
+        let centre_count = centre_occ.iter().filter(|&&o| o).count();
         for tau in [0.375f32, 0.25, 0.125] {
-            let mut g = vol.grid.clone();
-            g.occ = centre_occ.iter().zip(&frac).map(|(&o, &f)| o || f >= tau).collect();
-            let added = g.count() - centre_occ.iter().filter(|&&o| o).count();
+            let mut g = VoxelGrid { dims: vol.grid.dims, occ: centre_occ.iter().zip(&frac).map(|(&o, &f)| o || f >= tau).collect() };
+            let added = g.count() - centre_count;
             let f2 = make_well_composed(&mut g);
             let (b0, b2, b1) = betti(&g);
             let n = g.count();
@@ -358,8 +358,7 @@ fn mesh_lattice(
         ..Default::default()
     };
     let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads };
-    let details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats });
-    let mut details = details;
+    let mut details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats });
     if let Some((added, tau)) = thin_wall {
         // the lattice was repaired for a porous thin wall (topology_lattice)
         details["voxels_added_for_thin_walls"] = serde_json::json!({ "voxels": added, "min_solid_fraction": tau });
