@@ -35,6 +35,9 @@ fn main() -> sddpm::Result<()> {
             "{}: elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} volume {:.4} vs {:.4} ({:.1} s)",
             r.domain, q.elements, q.inverted, q.min, q.mean, r.hausdorff_relative, r.volume, r.input_volume, t.elapsed().as_secs_f64()
         );
+        let hd = &r.hausdorff;
+        let diag = hd.distance / hd.relative.max(1e-300);
+        println!("   hausdorff: hex->surface {:.4} surface->hex {:.4} mean {:.5} (relative)", hd.hex_to_surface / diag, hd.surface_to_hex / diag, hd.mean_relative);
         if let Some(l) = r.stages.first().map(|s| &s.details["lattices_meshed"]) {
             println!("   lattices meshed: {l}");
         }
@@ -64,6 +67,7 @@ fn main() -> sddpm::Result<()> {
             "release {rd}: level {} elements {} inverted {} min {:.3} mean {:.3} hausdorff {:.4} ({:.1} s)",
             r.hex.level, q.elements, q.inverted, q.min, q.mean, r.hex.hausdorff_relative, t.elapsed().as_secs_f64()
         );
+        println!("   surface map: {:?}", r.hex.surface_map);
         for s in &r.hex.stages {
             println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.details);
         }

@@ -149,6 +149,8 @@ pub struct HexAttempt {
     pub hausdorff_relative: f64,
     /// How many of `HexOptions::goals` the mesh misses (0-3).
     pub goals_missed: usize,
+    /// How far it falls short of them ([`crate::hex::QualityGoals::shortfall`]).
+    pub goal_shortfall: f64,
     pub seconds: f64,
 }
 
@@ -495,8 +497,8 @@ pub fn build_hex_for_polycube(
 
 impl HexAttempt {
     /// The ranking key of [`crate::hex::QualityGoals::rank`] from the recorded figures.
-    fn rank(&self) -> (usize, usize, f64) {
-        (self.inverted, self.goals_missed, -self.min_scaled_jacobian)
+    fn rank(&self) -> (usize, usize, f64, f64) {
+        (self.inverted, self.goals_missed, self.goal_shortfall, -self.min_scaled_jacobian)
     }
 
     fn describe(&self) -> String {
@@ -519,6 +521,7 @@ impl HexAttempt {
             inverted: r.quality.inverted,
             hausdorff_relative: r.hausdorff_relative,
             goals_missed: goals.missed(r),
+            goal_shortfall: goals.shortfall(r),
             seconds: started.elapsed().as_secs_f64(),
         }
     }
