@@ -949,3 +949,170 @@ mod tests {
         }
     }
 }
+
+/// What [`capture_features`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct CaptureStats {
+    /// Boundary nodes within reach of a sharp curve whose quads lie on both sides.
+    pub candidates: usize,
+    /// Nodes to go onto the curve / off it onto one face; how many got there.
+    pub snap: usize,
+    pub snapped: usize,
+    pub lift: usize,
+    pub lifted: usize,
+    pub rounds: usize,
+}
+
+/// Sharp-edge capture on a lattice boundary (experiment, issue 6): a boundary node
+/// within `reach` of a sharp feature curve whose boundary quads face both faces of
+/// the curve (by their normals) goes onto the curve when at least two quads face
+/// each side, and otherwise (one quad on the minority side: the convex corner of a
+/// staircase step) off the curve by half `reach` onto its majority face, so that
+/// no quad gets three nodes on a straight curve. The nodes are pulled in steps that
+/// keep every element above min(before, `floor`); snapped nodes then slide on the
+/// curve, nodes not reached go back.
+pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, floor: f64) -> CaptureStats {
+    let mut st = CaptureStats::default();
+    if sw.features.curves.is_empty() {
+        return st;
+    }
+    let bq: Vec<[u32; 4]> = super::topology::boundary_quads(&w.mesh).unwrap_or_default().into_iter().map(|q| q.nodes).collect();
+    let n = w.mesh.nodes.len();
+    let mut node_quads: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (k, q) in bq.iter().enumerate() {
+        for &v in q {
+            node_quads[v as usize].push(k as u32);
+        }
+    }
+    let qn: Vec<[f64; 3]> = bq
+        .iter()
+        .map(|q| {
+            let p = q.map(|i| w.mesh.nodes[i as usize]);
+            let c = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+            let l = norm(c);
+            if l > 0.0 {
+                scale(c, 1.0 / l)
+            } else {
+                c
+            }
+        })
+        .collect();
+    // the two faces along each input edge
+    let mut edge_tris: std::collections::HashMap<(u32, u32), Vec<u32>> = std::collections::HashMap::new();
+    for (t, tri) in sw.mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edge_tris.entry((a.min(b), a.max(b))).or_default().push(t as u32);
+        }
+    }
+    // (node, target, curve to slide on once there)
+    let plan: Vec<(usize, [f64; 3], Option<u32>)> = (0..n)
+        .into_par_iter()
+        .filter_map(|v| {
+            if w.role[v] != Role::Free || node_quads[v].len() < 2 {
+                return None;
+            }
+            let x = w.mesh.nodes[v];
+            let (c, cp) = (0..sw.features.curves.len()).map(|c| (c, sw.closest_on_curve(c, x))).min_by(|a, b| a.1.distance.total_cmp(&b.1.distance))?;
+            if cp.distance > reach {
+                return None;
+            }
+            let cv = &sw.features.curves[c];
+            let (a, b) = (cv.vertices[cp.segment as usize], cv.vertices[(cp.segment as usize + 1) % cv.vertices.len()]);
+            let tris = edge_tris.get(&(a.min(b), a.max(b)))?;
+            if tris.len() != 2 {
+                return None;
+            }
+            let (n1, n2) = (sw.normal(tris[0]), sw.normal(tris[1]));
+            let (mut k1, mut k2) = (0usize, 0usize);
+            for &q in &node_quads[v] {
+                if dot(qn[q as usize], n1) >= dot(qn[q as usize], n2) {
+                    k1 += 1;
+                } else {
+                    k2 += 1;
+                }
+            }
+            if k1 == 0 || k2 == 0 {
+                return None;
+            }
+            if k1 >= 2 && k2 >= 2 {
+                return Some((v, cp.point, Some(c as u32)));
+            }
+            // off the curve onto the majority face: away from the other face's plane
+            let (maj, other) = if k1 > k2 { (n1, n2) } else { (n2, n1) };
+            let y = sub(cp.point, scale(other, 0.5 * reach));
+            let (q, _, _) = sw.closest_facing(y, maj, 0.9);
+            Some((v, q, None))
+        })
+        .collect();
+    st.candidates = plan.len();
+    st.snap = plan.iter().filter(|p| p.2.is_some()).count();
+    st.lift = plan.len() - st.snap;
+    if plan.is_empty() {
+        return st;
+    }
+    let saved_role: Vec<Role> = plan.iter().map(|p| w.role[p.0]).collect();
+    for p in &plan {
+        w.role[p.0] = Role::Corner(0); // held: no projection while pulled
+    }
+    let start: Vec<([f64; 3], u32)> = plan.iter().map(|p| (w.mesh.nodes[p.0], w.attach[p.0])).collect();
+    let tol = 1e-3 * reach;
+    for r in 0..rounds {
+        st.rounds += 1;
+        let alpha = ((r + 1) as f64 / rounds as f64).min(1.0);
+        let mut moving = false;
+        for &(v, target, _) in &plan {
+            let x = w.mesh.nodes[v];
+            let d = sub(target, x);
+            if norm(d) <= tol {
+                continue;
+            }
+            moving = true;
+            let before = local_eval(w, v as u32, x);
+            for k in 0..4 {
+                let y = add(x, scale(d, alpha * 0.5f64.powi(k)));
+                let after = local_eval(w, v as u32, y);
+                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
+                    w.mesh.nodes[v] = y;
+                    break;
+                }
+            }
+        }
+        if !moving {
+            break;
+        }
+        smooth_nodes(w, sw, 2, floor, true);
+        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
+    }
+    for (k, &(v, target, curve)) in plan.iter().enumerate() {
+        let x = w.mesh.nodes[v];
+        if norm(sub(target, x)) <= tol {
+            w.mesh.nodes[v] = target;
+            match curve {
+                Some(c) => {
+                    w.role[v] = Role::Curve(c);
+                    w.attach[v] = u32::MAX;
+                    st.snapped += 1;
+                }
+                None => {
+                    w.role[v] = saved_role[k];
+                    w.attach[v] = sw.closest(target).1;
+                    st.lifted += 1;
+                }
+            }
+            continue;
+        }
+        w.role[v] = saved_role[k];
+        let before = local_eval(w, v as u32, x);
+        let (q, t, _) = sw.closest(x);
+        for (y, a) in [start[k], (q, t)] {
+            let after = local_eval(w, v as u32, y);
+            if after.1 <= before.1 && after.0 >= before.0.min(floor) {
+                w.mesh.nodes[v] = y;
+                w.attach[v] = a;
+                break;
+            }
+        }
+    }
+    st
+}

@@ -157,6 +157,15 @@ pub struct HexOptions {
     /// minimum 0.547 -> 0.217), rod 1.92 -> 2.09 %, and was undone on rockerarm,
     /// pinion, dragknob and mambo (BENCHMARKS.md "Coverage").
     pub pin_uncovered: f64,
+    /// Sharp-edge capture (after smoothing, before the coverage step): a boundary
+    /// node within 0.75 boundary edge lengths of a sharp feature curve whose quads
+    /// face both of the curve's faces goes onto the curve (two or more quads on
+    /// each side) or half that distance off it onto its majority face (one quad on
+    /// the minority side: a staircase step's convex corner), in steps that keep
+    /// every element above min(before, goal + 0.05)
+    /// ([`super::optimize::capture_features`]); undone unless it lowers the
+    /// two-sided Hausdorff distance with no inverted element. Default false.
+    pub capture_features: bool,
 }
 
 impl Default for HexOptions {
@@ -183,6 +192,7 @@ impl Default for HexOptions {
             hausdorff_samples: 20_000,
             keep_better_mapped: true,
             pin_uncovered: 0.0,
+            capture_features: false,
             voxel_fallback: true,
             voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,
             voxel_refinements: 2,
@@ -681,6 +691,27 @@ fn pass_reporter<'a, P: Progress + ?Sized>(progress: &'a mut P, lo: f64, span: f
 /// Hausdorff distance, and the mesh back in user coordinates.
 #[allow(clippy::too_many_arguments)]
 /// The report of a quality step that started at `t0` from `before` and left `mesh`.
+/// How near a sharp curve (in mean boundary edge lengths) a boundary node must be
+/// for the capture step to move it (0.5 / 0.75 / 1.0 / 1.5 measured on hepta and
+/// rod at HexGen-like counts: BENCHMARKS.md "Sharp-edge capture").
+const CAPTURE_REACH: f64 = 0.75;
+
+/// Mean length of the boundary edges of a mesh (0 without a boundary).
+fn mean_boundary_edge(w: &Work) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for v in 0..w.mesh.nodes.len() {
+        for &u in w.bgraph.of(v) {
+            sum += norm(sub(w.mesh.nodes[u as usize], w.mesh.nodes[v]));
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        sum / n as f64
+    }
+}
+
 fn stage_report(stage: &str, before: QualitySummary, mesh: &HexMesh, t0: Instant, details: serde_json::Value) -> StageReport {
     StageReport { stage: stage.into(), before, after: summary(mesh), nodes: mesh.nodes.len(), elements: mesh.elements.len(), seconds: t0.elapsed().as_secs_f64(), details }
 }
@@ -744,6 +775,34 @@ pub(crate) fn finish(
     let before = summary(&work.mesh);
     let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
     stages.push(stage_report("smoothing", before, &work.mesh, t0, serde_json::to_value(st).unwrap_or_default()));
+
+    // ---- sharp-edge capture: boundary nodes onto the feature curves near them ----
+    // kept only when it brings the boundary closer to the input without an
+    // inverted element
+    if opts.capture_features {
+        let t0 = Instant::now();
+        let before = summary(&work.mesh);
+        let saved = (work.mesh.nodes.clone(), work.role.clone(), work.attach.clone());
+        let reach = CAPTURE_REACH * mean_boundary_edge(&work);
+        let floor = before.min.min(opts.goals.min_scaled_jacobian + 0.05).max(0.0);
+        let st = optimize::capture_features(&mut work, &sw, reach, opts.surface_relax_iterations, floor);
+        if st.candidates > 0 {
+            let after = summary(&work.mesh);
+            let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
+            let h1 = hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative;
+            let kept = h1 < h0 && after.inverted == 0;
+            if !kept {
+                (work.mesh.nodes, work.role, work.attach) = saved;
+            }
+            let mut details = serde_json::to_value(st).unwrap_or_default();
+            if let Some(d) = details.as_object_mut() {
+                d.insert("hausdorff_relative_before".into(), serde_json::json!(h0));
+                d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
+                d.insert("kept".into(), serde_json::json!(kept));
+            }
+            stages.push(stage_report("capture", before, &work.mesh, t0, details));
+        }
+    }
 
     // ---- coverage: boundary nodes pinned to the input vertices the boundary misses ----
     // kept only when it brings the boundary closer to the input (two-sided
