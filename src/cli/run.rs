@@ -1,4 +1,4 @@
-//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline]`: the main job.
+//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline] [fallback options]`: the main job.
 
 use super::common::{load_checked, Loaded};
 use super::polycube::{load_model, options_of, request_of, PolycubeArgs};
@@ -24,6 +24,18 @@ pub struct RunArgs {
     /// How many candidates are meshed (verified ones, else unverified ones by fit); the best mesh is kept (default 4).
     #[arg(long)]
     pub hex_candidates: Option<usize>,
+    /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
+    #[arg(long)]
+    pub voxel_resolution: Option<usize>,
+    /// How many finer lattices the fallback may try after the first (default 2; 0: that lattice only).
+    #[arg(long)]
+    pub voxel_refinements: Option<usize>,
+    /// Sharp-edge capture: boundary nodes near the input's sharp edges go onto them (off by default; docs/hex.md).
+    #[arg(long)]
+    pub capture_features: bool,
+    /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
+    #[arg(long, value_name = "F")]
+    pub pin_uncovered: Option<f64>,
 }
 
 pub fn run(a: &RunArgs) -> Result<i32> {
@@ -43,6 +55,22 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     opts.require_valid_hex = a.strict;
     if let Some(n) = a.hex_candidates {
         opts.hex_candidates = n;
+    }
+    if let Some(n) = a.voxel_resolution {
+        if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
+            return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
+        }
+        opts.hex.voxel_resolution = n;
+    }
+    if let Some(n) = a.voxel_refinements {
+        opts.hex.voxel_refinements = n;
+    }
+    opts.hex.capture_features = a.capture_features;
+    if let Some(f) = a.pin_uncovered {
+        if !(f.is_finite() && f >= 0.0) {
+            return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));
+        }
+        opts.hex.pin_uncovered = f;
     }
     let mut progress = super::common::progress_bar(p.quiet);
     let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
