@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 /* Version of the C ABI this header declares; compare with sddpm_abi_version(). */
-#define SDDPM_ABI_VERSION 1
+#define SDDPM_ABI_VERSION 2
 
 // Fixed status numbers (mirrored by `sddpm_status` in include/sddpm.h).
 enum sddpm_status
@@ -174,10 +174,20 @@ typedef struct sddpm_hex_options {
   // Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
   // two-sided Hausdorff distance to the input over the bounding-box diagonal
   // (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
-  // minimum scaled Jacobian.
+  // how far they miss them (sum of the relative misses), then minimum scaled Jacobian.
   double goal_min_scaled_jacobian;
   double goal_mean_scaled_jacobian;
   double goal_hausdorff;
+  // How many finer lattices the fallback may try after its first (default 2; 0:
+  // the first lattice only).
+  uint32_t voxel_refinements;
+  // Coverage step: input vertices farther than this fraction of the Hausdorff goal
+  // from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
+  // measured).
+  double pin_uncovered;
+  // Sharp-edge capture step: boundary nodes near the input's sharp edges go onto
+  // them (default false).
+  bool capture_features;
 } sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short

@@ -59,10 +59,20 @@ pub struct SddpmHexOptions {
     /// Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
     /// two-sided Hausdorff distance to the input over the bounding-box diagonal
     /// (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
-    /// minimum scaled Jacobian.
+    /// how far they miss them (sum of the relative misses), then minimum scaled Jacobian.
     pub goal_min_scaled_jacobian: f64,
     pub goal_mean_scaled_jacobian: f64,
     pub goal_hausdorff: f64,
+    /// How many finer lattices the fallback may try after its first (default 2; 0:
+    /// the first lattice only).
+    pub voxel_refinements: u32,
+    /// Coverage step: input vertices farther than this fraction of the Hausdorff goal
+    /// from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
+    /// measured).
+    pub pin_uncovered: f64,
+    /// Sharp-edge capture step: boundary nodes near the input's sharp edges go onto
+    /// them (default false).
+    pub capture_features: bool,
 }
 
 /// Quality summary of a hex mesh.
@@ -135,6 +145,9 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
             goal_min_scaled_jacobian: h.goals.min_scaled_jacobian,
             goal_mean_scaled_jacobian: h.goals.mean_scaled_jacobian,
             goal_hausdorff: h.goals.hausdorff,
+            voxel_refinements: h.voxel_refinements as u32,
+            pin_uncovered: h.pin_uncovered,
+            capture_features: h.capture_features,
         };
         Ok(())
     }
@@ -159,6 +172,9 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
             o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff
         )));
     }
+    if !(o.pin_uncovered >= 0.0 && o.pin_uncovered.is_finite()) {
+        return Err(Error::InvalidArgument(format!("hex options: pin_uncovered {} (a finite number >= 0)", o.pin_uncovered)));
+    }
     if o.voxel_resolution < 2 {
         return Err(Error::InvalidArgument(format!("hex options: voxel_resolution {} (at least 2)", o.voxel_resolution)));
     }
@@ -174,6 +190,9 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     h.optimise_target = o.optimise_target;
     h.voxel_fallback = o.voxel_fallback;
     h.voxel_resolution = o.voxel_resolution as usize;
+    h.voxel_refinements = o.voxel_refinements as usize;
+    h.pin_uncovered = o.pin_uncovered;
+    h.capture_features = o.capture_features;
     h.goals = crate::hex::QualityGoals {
         min_scaled_jacobian: o.goal_min_scaled_jacobian,
         mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
@@ -463,5 +482,12 @@ mod tests {
         }
         let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
         assert!(e.contains("voxel_resolution 1"), "{e}");
+        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: true, ..o })).unwrap();
+        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features), (0, 0.6, true));
+        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, false));
+        for bad in [f64::NAN, -0.1, f64::INFINITY] {
+            let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();
+            assert!(e.contains("pin_uncovered"), "{e}");
+        }
     }
 }
