@@ -533,34 +533,8 @@ pub fn cover_uncovered_vertices(w: &mut Work, sw: &Surface, tol: f64, rounds: us
     let start: Vec<[f64; 3]> = pins.iter().map(|&(v, _)| w.mesh.nodes[v]).collect();
     let start_attach: Vec<u32> = pins.iter().map(|&(v, _)| w.attach[v]).collect();
     let reach = 1e-3 * tol;
-    for r in 0..rounds {
-        st.rounds += 1;
-        let alpha = ((r + 1) as f64 / rounds as f64).min(1.0);
-        let mut moving = false;
-        for &(v, i) in &pins {
-            let x = w.mesh.nodes[v];
-            let d = sub(sw.mesh.vertices[i], x);
-            if norm(d) <= reach {
-                continue;
-            }
-            moving = true;
-            let before = local_eval(w, v as u32, x);
-            for k in 0..4 {
-                let y = add(x, scale(d, alpha * 0.5f64.powi(k)));
-                let after = local_eval(w, v as u32, y);
-                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
-                    w.mesh.nodes[v] = y;
-                    st.moves_accepted += 1;
-                    break;
-                }
-            }
-        }
-        if !moving {
-            break;
-        }
-        smooth_nodes(w, sw, 2, floor, true);
-        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
-    }
+    let moves: Vec<(usize, [f64; 3])> = pins.iter().map(|&(v, i)| (v, sw.mesh.vertices[i])).collect();
+    (st.rounds, st.moves_accepted) = pull_nodes(w, sw, &moves, rounds, floor, reach);
     for (k, &(v, i)) in pins.iter().enumerate() {
         let x = w.mesh.nodes[v];
         if norm(sub(sw.mesh.vertices[i], x)) <= reach {
@@ -572,18 +546,64 @@ pub fn cover_uncovered_vertices(w: &mut Work, sw: &Surface, tol: f64, rounds: us
         // not reached: back where it started on the surface if that keeps its
         // elements valid, else onto the surface where it stands
         w.role[v] = Role::Free;
-        let before = local_eval(w, v as u32, x);
-        let (q, t, _) = sw.closest(x);
-        for (y, a) in [(start[k], start_attach[k]), (q, t)] {
-            let after = local_eval(w, v as u32, y);
-            if after.1 <= before.1 && after.0 >= before.0.min(floor) {
-                w.mesh.nodes[v] = y;
-                w.attach[v] = a;
-                break;
-            }
-        }
+        put_back(w, sw, v, (start[k], start_attach[k]), floor);
     }
     st
+}
+
+/// Pull held nodes towards their targets over `rounds` rounds (a growing share of
+/// the way each round, halved up to three times until the node's elements stay
+/// above min(before, `floor`) with no more inverted), smoothing the interior
+/// between rounds; a node within `reach` of its target is not moved again.
+/// Returns the rounds run and the moves accepted.
+fn pull_nodes(w: &mut Work, sw: &Surface, moves: &[(usize, [f64; 3])], rounds: usize, floor: f64, reach: f64) -> (usize, usize) {
+    let (mut ran, mut accepted) = (0, 0);
+    for r in 0..rounds {
+        ran += 1;
+        let alpha = ((r + 1) as f64 / rounds as f64).min(1.0);
+        let mut moving = false;
+        for &(v, target) in moves {
+            let x = w.mesh.nodes[v];
+            let d = sub(target, x);
+            if norm(d) <= reach {
+                continue;
+            }
+            moving = true;
+            let before = local_eval(w, v as u32, x);
+            for k in 0..4 {
+                let y = add(x, scale(d, alpha * 0.5f64.powi(k)));
+                let after = local_eval(w, v as u32, y);
+                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
+                    w.mesh.nodes[v] = y;
+                    accepted += 1;
+                    break;
+                }
+            }
+        }
+        if !moving {
+            break;
+        }
+        smooth_nodes(w, sw, 2, floor, true);
+        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
+    }
+    (ran, accepted)
+}
+
+/// A pulled node that did not arrive: back to where it started (`start`, with its
+/// triangle) when that keeps its elements valid and above min(now, `floor`), else
+/// onto the surface where it stands, else where it is.
+fn put_back(w: &mut Work, sw: &Surface, v: usize, start: ([f64; 3], u32), floor: f64) {
+    let x = w.mesh.nodes[v];
+    let before = local_eval(w, v as u32, x);
+    let (q, t, _) = sw.closest(x);
+    for (y, a) in [start, (q, t)] {
+        let after = local_eval(w, v as u32, y);
+        if after.1 <= before.1 && after.0 >= before.0.min(floor) {
+            w.mesh.nodes[v] = y;
+            w.attach[v] = a;
+            break;
+        }
+    }
 }
 
 /// Axis (0 = u: node 0 -> 1, 1 = v: 0 -> 3, 2 = w: 0 -> 4) of each edge of each Verdict corner.
@@ -1057,33 +1077,8 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
     }
     let start: Vec<([f64; 3], u32)> = plan.iter().map(|p| (w.mesh.nodes[p.0], w.attach[p.0])).collect();
     let tol = 1e-3 * reach;
-    for r in 0..rounds {
-        st.rounds += 1;
-        let alpha = ((r + 1) as f64 / rounds as f64).min(1.0);
-        let mut moving = false;
-        for &(v, target, _) in &plan {
-            let x = w.mesh.nodes[v];
-            let d = sub(target, x);
-            if norm(d) <= tol {
-                continue;
-            }
-            moving = true;
-            let before = local_eval(w, v as u32, x);
-            for k in 0..4 {
-                let y = add(x, scale(d, alpha * 0.5f64.powi(k)));
-                let after = local_eval(w, v as u32, y);
-                if after.0 >= before.0.min(floor) && after.1 <= before.1 {
-                    w.mesh.nodes[v] = y;
-                    break;
-                }
-            }
-        }
-        if !moving {
-            break;
-        }
-        smooth_nodes(w, sw, 2, floor, true);
-        optimise_nodes(w, sw, 0.3, 2, true, |_| false);
-    }
+    let moves: Vec<(usize, [f64; 3])> = plan.iter().map(|&(v, t, _)| (v, t)).collect();
+    st.rounds = pull_nodes(w, sw, &moves, rounds, floor, tol).0;
     for (k, &(v, target, curve)) in plan.iter().enumerate() {
         let x = w.mesh.nodes[v];
         if norm(sub(target, x)) <= tol {
@@ -1103,16 +1098,7 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
             continue;
         }
         w.role[v] = saved_role[k];
-        let before = local_eval(w, v as u32, x);
-        let (q, t, _) = sw.closest(x);
-        for (y, a) in [start[k], (q, t)] {
-            let after = local_eval(w, v as u32, y);
-            if after.1 <= before.1 && after.0 >= before.0.min(floor) {
-                w.mesh.nodes[v] = y;
-                w.attach[v] = a;
-                break;
-            }
-        }
+        put_back(w, sw, v, start[k], floor);
     }
     st
 }

@@ -712,6 +712,43 @@ fn mean_boundary_edge(w: &Work) -> f64 {
     }
 }
 
+/// A step that moves boundary nodes towards the input (capture, coverage), kept only
+/// when it brings the boundary closer to the input (two-sided Hausdorff distance)
+/// without an inverted element or a minimum below both the one before and the goal.
+/// `step` gets the floor no element may go below (min(before, goal + 0.05)) and says
+/// whether it had anything to do (else no stage is reported), whether it moved a
+/// node, and its details.
+fn guarded_fit_step(
+    work: &mut Work,
+    sw: &Surface,
+    opts: &HexOptions,
+    name: &str,
+    stages: &mut Vec<StageReport>,
+    step: impl FnOnce(&mut Work, f64) -> (bool, bool, serde_json::Value),
+) {
+    let t0 = Instant::now();
+    let before = summary(&work.mesh);
+    let saved = (work.mesh.nodes.clone(), work.role.clone(), work.attach.clone());
+    let floor = before.min.min(opts.goals.min_scaled_jacobian + 0.05).max(0.0);
+    let (attempted, moved, mut details) = step(work, floor);
+    if !attempted {
+        return;
+    }
+    let after = summary(&work.mesh);
+    let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
+    let h1 = if moved { hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative } else { h0 };
+    let kept = moved && h1 < h0 && after.inverted == 0 && (after.min >= before.min || after.min >= opts.goals.min_scaled_jacobian);
+    if !kept {
+        (work.mesh.nodes, work.role, work.attach) = saved;
+    }
+    if let Some(d) = details.as_object_mut() {
+        d.insert("hausdorff_relative_before".into(), serde_json::json!(h0));
+        d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
+        d.insert("kept".into(), serde_json::json!(kept));
+    }
+    stages.push(stage_report(name, before, &work.mesh, t0, details));
+}
+
 fn stage_report(stage: &str, before: QualitySummary, mesh: &HexMesh, t0: Instant, details: serde_json::Value) -> StageReport {
     StageReport { stage: stage.into(), before, after: summary(mesh), nodes: mesh.nodes.len(), elements: mesh.elements.len(), seconds: t0.elapsed().as_secs_f64(), details }
 }
@@ -777,59 +814,21 @@ pub(crate) fn finish(
     stages.push(stage_report("smoothing", before, &work.mesh, t0, serde_json::to_value(st).unwrap_or_default()));
 
     // ---- sharp-edge capture: boundary nodes onto the feature curves near them ----
-    // kept only when it brings the boundary closer to the input without an
-    // inverted element
     if opts.capture_features {
-        let t0 = Instant::now();
-        let before = summary(&work.mesh);
-        let saved = (work.mesh.nodes.clone(), work.role.clone(), work.attach.clone());
         let reach = CAPTURE_REACH * mean_boundary_edge(&work);
-        let floor = before.min.min(opts.goals.min_scaled_jacobian + 0.05).max(0.0);
-        let st = optimize::capture_features(&mut work, &sw, reach, opts.surface_relax_iterations, floor);
-        if st.candidates > 0 {
-            let after = summary(&work.mesh);
-            let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
-            let h1 = hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative;
-            let kept = h1 < h0 && after.inverted == 0;
-            if !kept {
-                (work.mesh.nodes, work.role, work.attach) = saved;
-            }
-            let mut details = serde_json::to_value(st).unwrap_or_default();
-            if let Some(d) = details.as_object_mut() {
-                d.insert("hausdorff_relative_before".into(), serde_json::json!(h0));
-                d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
-                d.insert("kept".into(), serde_json::json!(kept));
-            }
-            stages.push(stage_report("capture", before, &work.mesh, t0, details));
-        }
+        guarded_fit_step(&mut work, sw, opts, "capture", &mut stages, |w, floor| {
+            let st = optimize::capture_features(w, sw, reach, opts.surface_relax_iterations, floor);
+            (st.candidates > 0, st.snapped + st.lifted > 0, serde_json::to_value(st).unwrap_or_default())
+        });
     }
 
     // ---- coverage: boundary nodes pinned to the input vertices the boundary misses ----
-    // kept only when it brings the boundary closer to the input (two-sided
-    // Hausdorff distance) without an inverted element or a minimum below both the
-    // one before and the goal
     if opts.pin_uncovered > 0.0 && opts.goals.hausdorff > 0.0 {
-        let t0 = Instant::now();
-        let before = summary(&work.mesh);
         let tol = opts.pin_uncovered * opts.goals.hausdorff * sw.bbox.diagonal();
-        let saved = (work.mesh.nodes.clone(), work.role.clone(), work.attach.clone());
-        let st = optimize::cover_uncovered_vertices(&mut work, &sw, tol, opts.surface_relax_iterations, before.min.min(opts.goals.min_scaled_jacobian + 0.05).max(0.0));
-        if st.uncovered > 0 {
-            let after = summary(&work.mesh);
-            let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
-            let h1 = if st.pinned > 0 { hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative } else { h0 };
-            let kept = st.pinned > 0 && h1 < h0 && after.inverted == 0 && (after.min >= before.min || after.min >= opts.goals.min_scaled_jacobian);
-            if !kept {
-                (work.mesh.nodes, work.role, work.attach) = saved;
-            }
-            let mut details = serde_json::to_value(st).unwrap_or_default();
-            if let Some(d) = details.as_object_mut() {
-                d.insert("hausdorff_relative_before".into(), serde_json::json!(h0));
-                d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
-                d.insert("kept".into(), serde_json::json!(kept));
-            }
-            stages.push(stage_report("coverage", before, &work.mesh, t0, details));
-        }
+        guarded_fit_step(&mut work, sw, opts, "coverage", &mut stages, |w, floor| {
+            let st = optimize::cover_uncovered_vertices(w, sw, tol, opts.surface_relax_iterations, floor);
+            (st.uncovered > 0, st.pinned > 0, serde_json::to_value(st).unwrap_or_default())
+        });
     }
 
     // ---- optimisation ----
