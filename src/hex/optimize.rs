@@ -910,66 +910,6 @@ pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64, mut cancel: impl FnM
     st
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::hex::grid::lattice_hex;
-    use crate::hex::quality::element_qualities;
-    use crate::polycube::{assemble, Primitive};
-
-    /// A cube cell at level 2 (12 x 12 x 12 elements) with its interior nodes displaced
-    /// by a fixed pseudo-random field (boundary nodes held as corners).
-    fn distorted_cube() -> Work {
-        let mut l = [Primitive::Null; 12];
-        l[0] = Primitive::Cube;
-        let mut w = crate::hex::pillow::tests::work_of(&lattice_hex(&assemble(&l), 2));
-        let n = w.mesh.nodes.len();
-        for r in w.role.iter_mut() {
-            if *r != Role::Interior {
-                *r = Role::Corner(0);
-            }
-        }
-        let hsz = mean_edge(&w, 0);
-        let mut s = 0x2545f4914f6cdd1du64;
-        for v in 0..n {
-            if w.role[v] == Role::Interior {
-                for a in 0..3 {
-                    s ^= s << 13;
-                    s ^= s >> 7;
-                    s ^= s << 17;
-                    w.mesh.nodes[v][a] += 0.2 * hsz * ((s % 2001) as f64 / 1000.0 - 1.0);
-                }
-            }
-        }
-        w
-    }
-
-    #[test]
-    fn mean_ascent_raises_the_mean_and_keeps_the_minimum() {
-        let mut w = distorted_cube();
-        let q0 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
-        assert_eq!(q0.inverted, 0, "{q0:?}");
-        assert!(q0.mean < 0.9, "the start should be distorted: {q0:?}");
-        let st = mean_ascent(&mut w, 30, q0.min, |_| false);
-        let q1 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
-        assert!(st.moves_accepted > 0);
-        // the floor is the start minimum: no element may end below it
-        assert!(q1.min >= q0.min - 1e-12, "{q0:?} -> {q1:?}");
-        assert_eq!(q1.inverted, 0);
-        // with the boundary fixed the perfect grid (every element 1) is the maximiser
-        // and is reachable by moving one node at a time: measured 0.854 -> 0.99998
-        // (min 0.386 -> 0.99995) in 30 passes; 0.99 leaves room for the step rules
-        assert!(q1.mean > 0.99, "{q0:?} -> {q1:?}");
-        // boundary nodes did not move
-        let h = distorted_cube();
-        for v in 0..w.mesh.nodes.len() {
-            if w.role[v] != Role::Interior {
-                assert_eq!(w.mesh.nodes[v], h.mesh.nodes[v]);
-            }
-        }
-    }
-}
-
 /// What [`capture_features`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct CaptureStats {
@@ -983,7 +923,7 @@ pub struct CaptureStats {
     pub rounds: usize,
 }
 
-/// Sharp-edge capture on a lattice boundary (experiment, issue 6): a boundary node
+/// Sharp-edge capture on a lattice boundary (`HexOptions::capture_features`): a boundary node
 /// within `reach` of a sharp feature curve whose boundary quads face both faces of
 /// the curve (by their normals) goes onto the curve when at least two quads face
 /// each side, and otherwise (one quad on the minority side: the convex corner of a
@@ -1073,7 +1013,9 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
     }
     let saved_role: Vec<Role> = plan.iter().map(|p| w.role[p.0]).collect();
     for p in &plan {
-        w.role[p.0] = Role::Corner(0); // held: no projection while pulled
+        // held while pulled: no projection (only interior nodes are smoothed
+        // meanwhile, so the vertex index is never used)
+        w.role[p.0] = Role::Corner(0);
     }
     let start: Vec<([f64; 3], u32)> = plan.iter().map(|p| (w.mesh.nodes[p.0], w.attach[p.0])).collect();
     let tol = 1e-3 * reach;
@@ -1101,4 +1043,64 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
         put_back(w, sw, v, start[k], floor);
     }
     st
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hex::grid::lattice_hex;
+    use crate::hex::quality::element_qualities;
+    use crate::polycube::{assemble, Primitive};
+
+    /// A cube cell at level 2 (12 x 12 x 12 elements) with its interior nodes displaced
+    /// by a fixed pseudo-random field (boundary nodes held as corners).
+    fn distorted_cube() -> Work {
+        let mut l = [Primitive::Null; 12];
+        l[0] = Primitive::Cube;
+        let mut w = crate::hex::pillow::tests::work_of(&lattice_hex(&assemble(&l), 2));
+        let n = w.mesh.nodes.len();
+        for r in w.role.iter_mut() {
+            if *r != Role::Interior {
+                *r = Role::Corner(0);
+            }
+        }
+        let hsz = mean_edge(&w, 0);
+        let mut s = 0x2545f4914f6cdd1du64;
+        for v in 0..n {
+            if w.role[v] == Role::Interior {
+                for a in 0..3 {
+                    s ^= s << 13;
+                    s ^= s >> 7;
+                    s ^= s << 17;
+                    w.mesh.nodes[v][a] += 0.2 * hsz * ((s % 2001) as f64 / 1000.0 - 1.0);
+                }
+            }
+        }
+        w
+    }
+
+    #[test]
+    fn mean_ascent_raises_the_mean_and_keeps_the_minimum() {
+        let mut w = distorted_cube();
+        let q0 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
+        assert_eq!(q0.inverted, 0, "{q0:?}");
+        assert!(q0.mean < 0.9, "the start should be distorted: {q0:?}");
+        let st = mean_ascent(&mut w, 30, q0.min, |_| false);
+        let q1 = crate::hex::quality::summarize(&element_qualities(&w.mesh));
+        assert!(st.moves_accepted > 0);
+        // the floor is the start minimum: no element may end below it
+        assert!(q1.min >= q0.min - 1e-12, "{q0:?} -> {q1:?}");
+        assert_eq!(q1.inverted, 0);
+        // with the boundary fixed the perfect grid (every element 1) is the maximiser
+        // and is reachable by moving one node at a time: measured 0.854 -> 0.99998
+        // (min 0.386 -> 0.99995) in 30 passes; 0.99 leaves room for the step rules
+        assert!(q1.mean > 0.99, "{q0:?} -> {q1:?}");
+        // boundary nodes did not move
+        let h = distorted_cube();
+        for v in 0..w.mesh.nodes.len() {
+            if w.role[v] != Role::Interior {
+                assert_eq!(w.mesh.nodes[v], h.mesh.nodes[v]);
+            }
+        }
+    }
 }
