@@ -6,6 +6,7 @@
 # Usage: bash benches/run_main_job.sh [OUT]   (default build/runs). Prints the table.
 # MESHES="cgal_spool hexgen_bust" runs only those (the table then also shows the
 # meshes already in OUT/status.txt, the latest run of each).
+# RUN_ARGS="--capture-features" adds options to every `sddpm run`.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/runs}
@@ -15,7 +16,7 @@ for f in tests/data/meshes/*.off tests/data/meshes/*.obj tests/data/meshes/*.stl
   n=$(basename "${f%.*}")
   if [ -n "${MESHES:-}" ] && [[ " $MESHES " != *" $n "* ]]; then continue; fi
   start=$(date +%s.%N)
-  if ./target/release/sddpm run "$f" -o "$out/$n" -q 2> "$out/$n.err"; then rc=0; else rc=$?; fi
+  if ./target/release/sddpm run "$f" -o "$out/$n" -q ${RUN_ARGS:-} 2> "$out/$n.err"; then rc=0; else rc=$?; fi
   echo "$n $rc $(echo "$(date +%s.%N) - $start" | bc)" >> "$out/status.txt"
 done
 python3 - "$out" <<'PY'
