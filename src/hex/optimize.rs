@@ -530,8 +530,7 @@ pub fn cover_uncovered_vertices(w: &mut Work, sw: &Surface, tol: f64, rounds: us
     for &(v, i) in &pins {
         w.role[v] = Role::Corner(i as u32);
     }
-    let start: Vec<[f64; 3]> = pins.iter().map(|&(v, _)| w.mesh.nodes[v]).collect();
-    let start_attach: Vec<u32> = pins.iter().map(|&(v, _)| w.attach[v]).collect();
+    let start: Vec<([f64; 3], u32)> = pins.iter().map(|&(v, _)| (w.mesh.nodes[v], w.attach[v])).collect();
     let reach = 1e-3 * tol;
     let moves: Vec<(usize, [f64; 3])> = pins.iter().map(|&(v, i)| (v, sw.mesh.vertices[i])).collect();
     (st.rounds, st.moves_accepted) = pull_nodes(w, sw, &moves, rounds, floor, reach);
@@ -546,7 +545,7 @@ pub fn cover_uncovered_vertices(w: &mut Work, sw: &Surface, tol: f64, rounds: us
         // not reached: back where it started on the surface if that keeps its
         // elements valid, else onto the surface where it stands
         w.role[v] = Role::Free;
-        put_back(w, sw, v, (start[k], start_attach[k]), floor);
+        put_back(w, sw, v, start[k], floor);
     }
     st
 }

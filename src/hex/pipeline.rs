@@ -686,11 +686,6 @@ fn pass_reporter<'a, P: Progress + ?Sized>(progress: &'a mut P, lo: f64, span: f
     }
 }
 
-/// The quality steps and the result, from the mapped mesh of the chosen level:
-/// pillowing, smoothing, optimisation, the release of folded boundary nodes, the
-/// Hausdorff distance, and the mesh back in user coordinates.
-#[allow(clippy::too_many_arguments)]
-/// The report of a quality step that started at `t0` from `before` and left `mesh`.
 /// How near a sharp curve (in mean boundary edge lengths) a boundary node must be
 /// for the capture step to move it (0.5 / 0.75 / 1.0 / 1.5 measured on hepta and
 /// rod at HexGen-like counts: BENCHMARKS.md "Sharp-edge capture").
@@ -749,10 +744,16 @@ fn guarded_fit_step(
     stages.push(stage_report(name, before, &work.mesh, t0, details));
 }
 
+/// The report of a quality step that started at `t0` from `before` and left `mesh`.
 fn stage_report(stage: &str, before: QualitySummary, mesh: &HexMesh, t0: Instant, details: serde_json::Value) -> StageReport {
     StageReport { stage: stage.into(), before, after: summary(mesh), nodes: mesh.nodes.len(), elements: mesh.elements.len(), seconds: t0.elapsed().as_secs_f64(), details }
 }
 
+/// The quality steps and the result, from the mapped mesh of the chosen level:
+/// pillowing, smoothing, the capture and coverage steps when asked for,
+/// optimisation, the release of folded boundary nodes, the Hausdorff distance,
+/// and the mesh back in user coordinates.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     lv: Level,
     targets: Vec<[f64; 3]>,
