@@ -964,6 +964,23 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
             edge_tris.entry((a.min(b), a.max(b))).or_default().push(t as u32);
         }
     }
+    // the curves' segments in runs of CAPTURE_CHUNK with their boxes: a node looks
+    // only at the runs whose box is within reach (the nearest curve within reach is
+    // among them)
+    const CAPTURE_CHUNK: usize = 16;
+    let chunks: Vec<(usize, std::ops::Range<usize>, crate::geometry::bvh::Aabb)> = (0..sw.features.curves.len())
+        .flat_map(|c| {
+            let ns = sw.curve_segments(c);
+            (0..ns).step_by(CAPTURE_CHUNK).map(move |s0| (c, s0..(s0 + CAPTURE_CHUNK).min(ns)))
+        })
+        .map(|(c, r)| {
+            let b = r.clone().fold(crate::geometry::bvh::Aabb::EMPTY, |b, s| {
+                let (p, q) = sw.curve_segment(c, s);
+                b.grow(p).grow(q)
+            });
+            (c, r, b)
+        })
+        .collect();
     // (node, target, curve to slide on once there)
     let plan: Vec<(usize, [f64; 3], Option<u32>)> = (0..n)
         .into_par_iter()
@@ -972,7 +989,11 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
                 return None;
             }
             let x = w.mesh.nodes[v];
-            let (c, cp) = (0..sw.features.curves.len()).map(|c| (c, sw.closest_on_curve(c, x))).min_by(|a, b| a.1.distance.total_cmp(&b.1.distance))?;
+            let (c, cp) = chunks
+                .iter()
+                .filter(|ch| ch.2.dist2(x) <= reach * reach)
+                .map(|ch| (ch.0, sw.closest_on_curve_segments(ch.0, ch.1.clone(), x)))
+                .min_by(|a, b| a.1.distance.total_cmp(&b.1.distance))?;
             if cp.distance > reach {
                 return None;
             }

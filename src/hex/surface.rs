@@ -279,8 +279,14 @@ impl Surface {
 
     /// Closest point of curve `c` to `p`.
     pub fn closest_on_curve(&self, c: usize, p: [f64; 3]) -> CurvePoint {
+        self.closest_on_curve_segments(c, 0..self.curve_segments(c), p)
+    }
+
+    /// Closest point to `p` on the segments `segments` of curve `c` (distance
+    /// infinite for an empty range).
+    pub fn closest_on_curve_segments(&self, c: usize, segments: std::ops::Range<usize>, p: [f64; 3]) -> CurvePoint {
         let mut best = CurvePoint { segment: 0, t: 0.0, point: p, distance: f64::INFINITY };
-        for s in 0..self.curve_segments(c) {
+        for s in segments {
             let (a, b) = self.curve_segment(c, s);
             let ab = sub(b, a);
             let l2 = dot(ab, ab);

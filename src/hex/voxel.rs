@@ -127,7 +127,8 @@ pub const VOXEL_MAX_RESOLUTION: usize = 192;
 /// finer by the ratio of the measured Hausdorff distance to its goal (1.25x to 2x),
 /// within `opts.max_elements`, as long as each ranks better than the best before by
 /// [`super::QualityGoals::rank`] (one that ranks worse and misses the distance goal
-/// too gets one more lattice, 1.5x finer than it); when the best meets every goal with room to
+/// too gets one more lattice: 1.5x finer than it when it folded, twice the best's
+/// resolution when it was valid; [`next_resolution`]); when the best meets every goal with room to
 /// spare and a coarser lattice missed the distance goal, one coarser resolution
 /// predicted from the two is meshed and kept when it meets every goal too (fewer
 /// elements). The best mesh is returned (its details list
@@ -167,25 +168,13 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     let mut best_res = res;
     let mut meshed = vec![(res, best.quality.elements, best.quality.min, best.quality.mean, best.hausdorff_relative)];
     // the lattice the next step starts from: the best so far, or the finer one that
-    // ranked worse while missing the distance goal too
-    let mut from = (res, best.hausdorff_relative);
-    let mut after_worse = false;
+    // ranked worse while missing the distance goal too (folded or farther)
+    let mut last = LastLattice::Best { res, hausdorff: best.hausdorff_relative };
     for k in 1..=opts.voxel_refinements {
-        if opts.goals.missed(&best) == 0 || from.0 >= VOXEL_MAX_RESOLUTION {
+        if opts.goals.missed(&best) == 0 || last.res() >= VOXEL_MAX_RESOLUTION {
             break;
         }
-        let mut next = if after_worse {
-            // the finer lattice still cut a feature thinner than its voxels: a
-            // smaller step than the distance would ask for (its mesh is not valid)
-            (from.0 as f64 * 1.5).ceil() as usize
-        } else {
-            // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
-            // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
-            let ratio = 1.1 * from.1 / opts.goals.hausdorff; // NaN for a NaN goal or distance
-            let factor = if ratio.is_nan() { 2.0 } else { ratio.clamp(1.25, 2.0) };
-            (from.0 as f64 * factor).ceil() as usize
-        }
-        .min(VOXEL_MAX_RESOLUTION);
+        let mut next = next_resolution(last, best_res, opts.goals.hausdorff).min(VOXEL_MAX_RESOLUTION);
         // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
         // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
         let lattice = loop {
@@ -200,21 +189,22 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         let r = mesh_lattice(lattice, next, &fr, opts, t_all, &mut sub)?;
         meshed.push((next, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
         if !opts.goals.beats(&r, Some(&best)) {
-            // finer ranked worse. When it misses the distance goal as well, a wall
-            // thinner than its voxels is still cut (cgal_spool's lip, 0.011-0.026
-            // thick: a quarter of a 24-voxel lattice's voxel, half of a 48's, whose
-            // mesh folds there; 72 voxels meet every goal): one more lattice, 1.5x
-            // finer. Otherwise, or after a second worse one, stop: a still finer
-            // lattice costs 2-8x more and is no surer to help.
-            if after_worse || !(r.hausdorff_relative > opts.goals.hausdorff) {
+            // finer ranked worse. When it misses the distance goal as well, one more
+            // lattice: after one that folded, a wall thinner than its voxels is
+            // still cut (cgal_spool's lip, 0.011-0.026 thick: a quarter of a
+            // 24-voxel lattice's voxel, half of a 48's, whose mesh folds there; 72
+            // voxels meet every goal); after a valid one that came out farther, the
+            // distance was not monotone ([`next_resolution`]). Otherwise, or after a
+            // second worse one, stop: a still finer lattice costs 2-8x more and is
+            // no surer to help.
+            if !matches!(last, LastLattice::Best { .. }) || !(r.hausdorff_relative > opts.goals.hausdorff) {
                 break;
             }
-            after_worse = true;
-            from = (next, r.hausdorff_relative);
+            let folded = r.quality.inverted > 0 || !(r.quality.min >= opts.goals.min_scaled_jacobian);
+            last = if folded { LastLattice::Folded { res: next } } else { LastLattice::Farther { res: next } };
             continue;
         }
-        after_worse = false;
-        from = (next, r.hausdorff_relative);
+        last = LastLattice::Best { res: next, hausdorff: r.hausdorff_relative };
         best = r;
         best_res = next;
     }
@@ -253,6 +243,48 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     best.seconds_total = t_all.elapsed().as_secs_f64();
     check_progress(progress, 1.0, "hex: done")?;
     Ok(best)
+}
+
+/// The fallback's last lattice, which the next resolution is chosen from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LastLattice {
+    /// The best mesh so far, at this distance from the input.
+    Best { res: usize, hausdorff: f64 },
+    /// Finer than the best, ranked worse and folded (inverted elements or a
+    /// minimum below the goal): it still cuts a feature thinner than its voxels.
+    Folded { res: usize },
+    /// Finer than the best, ranked worse, valid but farther from the input.
+    Farther { res: usize },
+}
+
+impl LastLattice {
+    fn res(self) -> usize {
+        match self {
+            LastLattice::Best { res, .. } | LastLattice::Folded { res } | LastLattice::Farther { res } => res,
+        }
+    }
+}
+
+/// The next, finer resolution of the fallback's refinement (before the topology
+/// check and the cap at [`VOXEL_MAX_RESOLUTION`]), from the last lattice, the best
+/// lattice's resolution and the distance goal.
+fn next_resolution(last: LastLattice, best_res: usize, goal: f64) -> usize {
+    match last {
+        LastLattice::Best { res, hausdorff } => {
+            // Hausdorff falls about linearly with the voxel size (measured: 24 -> 48
+            // halves it on rod, pinion, rockerarm, bust, hepta), so aim a tenth below the goal
+            let ratio = 1.1 * hausdorff / goal; // NaN for a NaN goal or distance
+            let factor = if ratio.is_nan() { 2.0 } else { ratio.clamp(1.25, 2.0) };
+            (res as f64 * factor).ceil() as usize
+        }
+        // a smaller step than the distance would ask for (cgal_spool: 24 voxels cut
+        // a thin lip, 48 fold on it, 72 meet every goal)
+        LastLattice::Folded { res } => (res as f64 * 1.5).ceil() as usize,
+        // the distance is not monotone in the resolution (hepta with the sharp-edge
+        // capture: 1.33 % at 24 voxels, 1.67 % at 36, 0.72 % at 48): the largest
+        // step from the best, or 1.25x past the farther lattice
+        LastLattice::Farther { res } => (best_res * 2).max((res as f64 * 1.25).ceil() as usize),
+    }
 }
 
 /// A lattice with the input's topology: its voxels, how many were filled to make it
@@ -513,6 +545,20 @@ mod tests {
         let first_passing = res(meshed.iter().find(|m| meets(m)).unwrap());
         assert!(meshed.iter().any(|m| res(m) > 24 && res(m) < first_passing) || coarsest < first_passing, "{meshed:?}");
         assert!(finest_missing < coarsest && opts.goals.missed(&r) == 0, "{meshed:?}");
+    }
+
+    #[test]
+    fn the_next_lattice_depends_on_how_the_last_one_compared() {
+        // distance-driven: 1.1 x 1.33 % / 1 % -> 1.46x; clamped to 1.25x .. 2x
+        assert_eq!(next_resolution(LastLattice::Best { res: 24, hausdorff: 0.0133 }, 24, 0.01), 36);
+        assert_eq!(next_resolution(LastLattice::Best { res: 24, hausdorff: 0.05 }, 24, 0.01), 48);
+        assert_eq!(next_resolution(LastLattice::Best { res: 24, hausdorff: 0.0101 }, 24, 0.01), 30);
+        assert_eq!(next_resolution(LastLattice::Best { res: 24, hausdorff: 0.02 }, 24, f64::NAN), 48);
+        // a finer lattice that folded: 1.5x past it (spool 24 -> 48 -> 72)
+        assert_eq!(next_resolution(LastLattice::Folded { res: 48 }, 24, 0.01), 72);
+        // valid but farther: twice the best (hepta 24 -> 36 -> 48), or 1.25x past it
+        assert_eq!(next_resolution(LastLattice::Farther { res: 36 }, 24, 0.01), 48);
+        assert_eq!(next_resolution(LastLattice::Farther { res: 48 }, 24, 0.01), 60);
     }
 
     #[test]
