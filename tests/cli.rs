@@ -109,15 +109,16 @@ fn run_writes_the_whole_run_folder() {
 }
 
 /// The fallback's options from the command line: a fixed coarse lattice with the
-/// sharp-edge capture and coverage steps (hepta at HexGen's element count,
-/// BENCHMARKS.md "Sharp-edge capture": 1,384 elements at 1.77 %); bad values refused.
+/// coverage step besides the default sharp-edge capture (hepta at HexGen's element
+/// count, BENCHMARKS.md "Sharp-edge capture": 1,384 elements at 1.49 %), and without
+/// the capture; bad values refused.
 #[test]
 fn run_takes_the_fallback_options() {
     let dir = std::env::temp_dir().join(format!("sddpm-cli-fallback-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_str().unwrap();
     let common = ["run", "tests/data/meshes/hexgen_hepta.obj", "-o", d, "--labels", "cube,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--no-spline", "--json", "-q"];
-    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--capture-features", "--pin-uncovered", "0.6"]).collect();
+    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--pin-uncovered", "0.6"]).collect();
     let (code, out, err) = sddpm(&args);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("one JSON object");
@@ -126,7 +127,19 @@ fn run_takes_the_fallback_options() {
     assert!(v["hex"]["hausdorff_relative"].as_f64().unwrap() < 0.02, "{}", v["hex"]);
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
-    assert!(stages.contains(&"capture") && stages.contains(&"coverage"), "{stages:?}");
+    assert!(stages.contains(&"capture") && stages.contains(&"coverage") && stages.contains(&"recapture"), "{stages:?}");
+    // the capture after the optimisation is kept only when it brings the boundary closer
+    let re = report["hex"]["stages"].as_array().unwrap().iter().find(|s| s["stage"] == "recapture").unwrap();
+    let d = &re["details"];
+    assert_eq!(d["kept"], serde_json::json!(true), "{d}");
+    assert!(d["hausdorff_relative_after"].as_f64().unwrap() < d["hausdorff_relative_before"].as_f64().unwrap(), "{d}");
+    // --no-capture-features: neither capture step
+    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features"]).collect();
+    let (code, _, err) = sddpm(&args);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
+    assert!(!stages.contains(&"capture") && !stages.contains(&"recapture"), "{stages:?}");
     for bad in [&["--voxel-resolution", "1"][..], &["--pin-uncovered=-1"][..], &["--pin-uncovered", "nan"][..]] {
         let args: Vec<&str> = common.iter().copied().chain(bad.iter().copied()).collect();
         let (code, _, err) = sddpm(&args);

@@ -30,9 +30,9 @@ pub struct RunArgs {
     /// How many finer lattices the fallback may try after the first (default 2; 0: that lattice only).
     #[arg(long)]
     pub voxel_refinements: Option<usize>,
-    /// Sharp-edge capture: boundary nodes near the input's sharp edges go onto them (off by default; docs/hex.md).
+    /// No sharp-edge capture (by default boundary nodes near the input's sharp edges go onto them; docs/hex.md).
     #[arg(long)]
-    pub capture_features: bool,
+    pub no_capture_features: bool,
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
@@ -65,7 +65,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     if let Some(n) = a.voxel_refinements {
         opts.hex.voxel_refinements = n;
     }
-    opts.hex.capture_features = a.capture_features;
+    opts.hex.capture_features = !a.no_capture_features;
     if let Some(f) = a.pin_uncovered {
         if !(f.is_finite() && f >= 0.0) {
             return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));

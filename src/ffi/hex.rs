@@ -70,8 +70,8 @@ pub struct SddpmHexOptions {
     /// from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
     /// measured).
     pub pin_uncovered: f64,
-    /// Sharp-edge capture step: boundary nodes near the input's sharp edges go onto
-    /// them (default false).
+    /// Sharp-edge capture steps (after smoothing and after the optimisation):
+    /// boundary nodes near the input's sharp edges go onto them (default true).
     pub capture_features: bool,
 }
 
@@ -482,9 +482,9 @@ mod tests {
         }
         let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
         assert!(e.contains("voxel_resolution 1"), "{e}");
-        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: true, ..o })).unwrap();
-        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features), (0, 0.6, true));
-        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, false));
+        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, ..o })).unwrap();
+        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features), (0, 0.6, false));
+        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, true));
         for bad in [f64::NAN, -0.1, f64::INFINITY] {
             let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();
             assert!(e.contains("pin_uncovered"), "{e}");

@@ -458,9 +458,10 @@ mod tests {
         // measured; BENCHMARKS.md "Sharp-edge capture")
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_hepta.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
-        let mut opts = HexOptions { voxel_refinements: 0, ..Default::default() };
+        assert!(HexOptions::default().capture_features, "on by default");
+        let mut opts = HexOptions { voxel_refinements: 0, capture_features: false, ..Default::default() };
         let plain = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
-        assert!(plain.stages.iter().all(|s| s.stage != "capture"), "off by default");
+        assert!(plain.stages.iter().all(|s| s.stage != "capture" && s.stage != "recapture"));
         opts.capture_features = true;
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
         let st = r.stages.iter().find(|s| s.stage == "capture").expect("a capture stage");

@@ -25,7 +25,7 @@ def test_hex_options_layout_matches_the_library():
     assert lib.sddpm_hex_options_default(ctypes.byref(o)) == 0
     assert (o.level, o.voxel_resolution, o.voxel_refinements) == (-1, 24, 2)
     assert (o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff) == (0.3, 0.85, 0.01)
-    assert (o.pin_uncovered, o.capture_features) == (0.0, False)
+    assert (o.pin_uncovered, o.capture_features) == (0.0, True)
 
 
 def test_mesh_load_check_and_arrays():
