@@ -185,8 +185,8 @@ typedef struct sddpm_hex_options {
   // from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
   // measured).
   double pin_uncovered;
-  // Sharp-edge capture step: boundary nodes near the input's sharp edges go onto
-  // them (default false).
+  // Sharp-edge capture steps (after smoothing and after the optimisation):
+  // boundary nodes near the input's sharp edges go onto them (default true).
   bool capture_features;
 } sddpm_hex_options;
 
