@@ -513,11 +513,13 @@ mod tests {
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
         let meshed = r.stages[0].details["lattices_meshed"].as_array().unwrap().clone();
         let res: Vec<u64> = meshed.iter().map(|m| m["resolution"].as_u64().unwrap()).collect();
-        assert_eq!(res, vec![24, 48, 72], "{meshed:?}");
+        assert_eq!(res[..3], [24, 48, 72], "{meshed:?}");
         let h = |i: usize| meshed[i]["hausdorff_relative"].as_f64().unwrap();
         assert!(h(0) > opts.goals.hausdorff && h(1) > opts.goals.hausdorff, "{meshed:?}");
         assert!(meshed[1]["min_scaled_jacobian"].as_f64().unwrap() < meshed[0]["min_scaled_jacobian"].as_f64().unwrap(), "{meshed:?}");
-        assert_eq!(r.domain, "voxel 72");
+        // 72 voxels, or the coarser lattice predicted from 48 and 72 when it meets
+        // every goal too (64 voxels with the sharp-edge capture: 0.93 %, min 0.300)
+        assert!(r.domain == "voxel 72" || (res.len() == 4 && res[3] < 72 && r.domain == format!("voxel {}", res[3])), "{} {meshed:?}", r.domain);
         assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
         assert_eq!(r.quality.inverted, 0);
         // the volume of the solid within 1 % (the lip and the recess are kept)
