@@ -4,7 +4,7 @@
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
 //! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
 //! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
-//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=1` turns the sharp-edge capture on).
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -24,8 +24,10 @@ fn main() -> sddpm::Result<()> {
         }
         // HEX_PIN=F: the coverage step at F times the Hausdorff goal (HexOptions::pin_uncovered)
         opts.pin_uncovered = std::env::var("HEX_PIN").ok().and_then(|s| s.parse().ok()).unwrap_or(0.0);
-        // HEX_CAPTURE=1: the sharp-edge capture step (HexOptions::capture_features)
-        opts.capture_features = std::env::var("HEX_CAPTURE").is_ok_and(|v| v == "1");
+        // HEX_CAPTURE=0: without the sharp-edge capture steps (HexOptions::capture_features, on by default)
+        if let Ok(v) = std::env::var("HEX_CAPTURE") {
+            opts.capture_features = v != "0";
+        }
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
         if let Some(g) = std::env::var("HEX_HAUSDORFF").ok().and_then(|s| s.parse().ok()) {
             opts.goals.hausdorff = g;
