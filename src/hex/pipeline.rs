@@ -736,11 +736,7 @@ fn guarded_fit_step(
     let after = summary(&work.mesh);
     let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
     let h1 = if moved { hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative } else { h0 };
-    let kept = moved
-        && h1 < h0
-        && after.inverted == 0
-        && (after.min >= before.min || after.min >= opts.goals.min_scaled_jacobian)
-        && (!hold_mean || after.mean >= before.mean || after.mean >= opts.goals.mean_scaled_jacobian);
+    let kept = moved && fit_step_kept(&before, &after, h0, h1, &opts.goals, hold_mean);
     if !kept {
         (work.mesh.nodes, work.role, work.attach) = saved;
     }
@@ -750,6 +746,16 @@ fn guarded_fit_step(
         d.insert("kept".into(), serde_json::json!(kept));
     }
     stages.push(stage_report(name, before, &work.mesh, t0, details));
+}
+
+/// Whether a fit step that moved nodes is kept ([`guarded_fit_step`]): the distance
+/// falls (`h1 < h0`), nothing is inverted, the minimum is at least the one before or
+/// meets its goal, and with `hold_mean` so is the mean.
+fn fit_step_kept(before: &QualitySummary, after: &QualitySummary, h0: f64, h1: f64, goals: &QualityGoals, hold_mean: bool) -> bool {
+    h1 < h0
+        && after.inverted == 0
+        && (after.min >= before.min || after.min >= goals.min_scaled_jacobian)
+        && (!hold_mean || after.mean >= before.mean || after.mean >= goals.mean_scaled_jacobian)
 }
 
 /// The report of a quality step that started at `t0` from `before` and left `mesh`.
@@ -1009,6 +1015,28 @@ mod tests {
         let r = build_hex_mesh(&input, &opts, &mut crate::error::NoProgress).unwrap();
         assert!((r.stages[0].after.min - 1.0).abs() < 1e-12);
         assert!(r.quality.min >= r.stages[0].after.min);
+    }
+
+    #[test]
+    fn a_fit_step_is_kept_only_when_closer_and_the_quality_holds() {
+        let g = QualityGoals::default();
+        let q = |min: f64, mean: f64, inverted: usize| QualitySummary { elements: 10, min, mean, max: 1.0, inverted };
+        let before = q(0.5, 0.9, 0);
+        // closer, quality as before: kept; not closer: undone
+        assert!(fit_step_kept(&before, &q(0.5, 0.9, 0), 0.02, 0.01, &g, true));
+        assert!(!fit_step_kept(&before, &q(0.5, 0.9, 0), 0.02, 0.02, &g, true));
+        assert!(!fit_step_kept(&before, &q(0.5, 0.9, 0), 0.02, f64::NAN, &g, true));
+        // an inverted element: undone
+        assert!(!fit_step_kept(&before, &q(-0.1, 0.9, 1), 0.02, 0.01, &g, false));
+        // the minimum may fall as long as it meets its goal (0.3)
+        assert!(fit_step_kept(&before, &q(0.31, 0.9, 0), 0.02, 0.01, &g, false));
+        assert!(!fit_step_kept(&before, &q(0.29, 0.9, 0), 0.02, 0.01, &g, false));
+        assert!(fit_step_kept(&q(0.2, 0.9, 0), &q(0.25, 0.9, 0), 0.02, 0.01, &g, false));
+        // the mean (goal 0.85) counts only for a step on the final mesh
+        assert!(fit_step_kept(&before, &q(0.5, 0.84, 0), 0.02, 0.01, &g, false));
+        assert!(!fit_step_kept(&before, &q(0.5, 0.84, 0), 0.02, 0.01, &g, true));
+        assert!(fit_step_kept(&before, &q(0.5, 0.86, 0), 0.02, 0.01, &g, true));
+        assert!(fit_step_kept(&q(0.5, 0.8, 0), &q(0.5, 0.81, 0), 0.02, 0.01, &g, true));
     }
 
     #[test]
