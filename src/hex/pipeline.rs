@@ -713,9 +713,10 @@ fn mean_boundary_edge(w: &Work) -> f64 {
 /// when it brings the boundary closer to the input (two-sided Hausdorff distance)
 /// without an inverted element or a minimum below both the one before and the goal
 /// (with `hold_mean`, nor a mean below both the one before and its goal: for a step
-/// after the optimisation, whose mesh is the result). `step` gets the floor no element may go below (min(before, goal + 0.05)) and says
-/// whether it had anything to do (else no stage is reported), whether it moved a
-/// node, and its details.
+/// after the optimisation, whose mesh is the result; [`fit_step_kept`]). `step` gets
+/// the floor no element may go below (min(before, goal + 0.05)) and says whether it
+/// had anything to do (else no stage is reported), whether it moved a node, and its
+/// details.
 fn guarded_fit_step(
     work: &mut Work,
     sw: &Surface,
@@ -765,8 +766,8 @@ fn stage_report(stage: &str, before: QualitySummary, mesh: &HexMesh, t0: Instant
 
 /// The quality steps and the result, from the mapped mesh of the chosen level:
 /// pillowing, smoothing, the capture and coverage steps when asked for,
-/// optimisation, the release of folded boundary nodes, the Hausdorff distance,
-/// and the mesh back in user coordinates.
+/// optimisation, the release of folded boundary nodes, the recapture (with the
+/// capture), the Hausdorff distance, and the mesh back in user coordinates.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     lv: Level,
