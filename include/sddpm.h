@@ -148,7 +148,8 @@ typedef struct sddpm_hex_options {
   uint32_t max_level;
   // Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
   double threshold;
-  // Most elements before pillowing (default 200000).
+  // Most elements before pillowing (default 200000): caps the automatic level (not
+  // below min_level) and the fallback's lattices.
   size_t max_elements;
   // Dihedral angle in degrees above which an input edge is a feature (default 40).
   double feature_angle;

@@ -152,6 +152,11 @@ pub struct HexAttempt {
     /// How far it falls short of them ([`crate::hex::QualityGoals::shortfall`]).
     pub goal_shortfall: f64,
     pub seconds: f64,
+    /// Why the build failed (its figures are then NaN, null in report.json): a
+    /// candidate whose mesh could not be built, or a fallback with no lattice of
+    /// the input's topology within `HexOptions::max_elements`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
 }
 
 /// Everything [`run`] produced.
@@ -256,7 +261,7 @@ pub fn run(
             "no polycube candidate's hex mesh met the quality goals (best: {}); the mesh comes from the grid-based fallback ({}: min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %), which ranks better, not from the polycube",
             attempts
                 .iter()
-                .filter(|a| a.candidate.is_some())
+                .filter(|a| a.candidate.is_some() && a.error.is_none())
                 .min_by(|a, b| a.rank().partial_cmp(&b.rank()).unwrap_or(std::cmp::Ordering::Equal))
                 .map(|a| a.describe())
                 .unwrap_or_else(|| "no mesh".into()),
@@ -452,6 +457,7 @@ pub fn build_hex_for_polycube(
             Ok(r) => r,
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(e) => {
+                attempts.push(HexAttempt::failed(Some(ci), cand.context.names(), &e, th));
                 last_err = Some(e);
                 continue;
             }
@@ -483,6 +489,9 @@ pub fn build_hex_for_polycube(
             }
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(e) => {
+                // reported with the attempts (and in the run's warning when a
+                // polycube mesh that misses the goals is kept)
+                attempts.push(HexAttempt::failed(None, "voxel".into(), &e, th));
                 if best.is_none() {
                     last_err = Some(e);
                 }
@@ -523,6 +532,23 @@ impl HexAttempt {
             goals_missed: goals.missed(r),
             goal_shortfall: goals.shortfall(r),
             seconds: started.elapsed().as_secs_f64(),
+            error: None,
+        }
+    }
+
+    /// A build that failed with `e`.
+    fn failed(candidate: Option<usize>, context: String, e: &Error, started: Instant) -> Self {
+        HexAttempt {
+            candidate,
+            context,
+            min_scaled_jacobian: f64::NAN,
+            mean_scaled_jacobian: f64::NAN,
+            inverted: 0,
+            hausdorff_relative: f64::NAN,
+            goals_missed: 3,
+            goal_shortfall: f64::NAN,
+            seconds: started.elapsed().as_secs_f64(),
+            error: Some(e.to_string()),
         }
     }
 }

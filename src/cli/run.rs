@@ -1,4 +1,4 @@
-//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline] [fallback options]`: the main job.
+//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline] [fallback options] [quality goals]`: the main job.
 
 use super::common::{load_checked, Loaded};
 use super::polycube::{load_model, options_of, request_of, PolycubeArgs};
@@ -36,18 +36,74 @@ pub struct RunArgs {
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
+    /// Quality goal: smallest acceptable minimum scaled Jacobian, in (-1, 1] (default 0.3). Meshes are ranked by the goals they miss; the fallback refines its lattice while the best misses one.
+    #[arg(long, value_name = "S")]
+    pub goal_min_sj: Option<f64>,
+    /// Quality goal: smallest acceptable mean scaled Jacobian, in (-1, 1] (default 0.85).
+    #[arg(long, value_name = "S")]
+    pub goal_mean_sj: Option<f64>,
+    /// Quality goal: largest acceptable two-sided Hausdorff distance between the mesh boundary and the input, relative to the bounding-box diagonal, > 0 (default 0.01; e.g. 0.02 for a coarser control mesh).
+    #[arg(long, value_name = "D")]
+    pub goal_hausdorff: Option<f64>,
+    /// Most elements a mesh may have before pillowing: caps the automatic octree level (not below its minimum, 2) and the fallback's lattices (default 200000).
+    #[arg(long, value_name = "N")]
+    pub max_elements: Option<usize>,
+}
+
+/// The hex-stage options of `sddpm run`'s arguments on top of `hex`, each checked
+/// (an out-of-range value is an error naming the option).
+fn hex_options(a: &RunArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> {
+    hex.level = a.level;
+    if let Some(n) = a.voxel_resolution {
+        if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
+            return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
+        }
+        hex.voxel_resolution = n;
+    }
+    if let Some(n) = a.voxel_refinements {
+        hex.voxel_refinements = n;
+    }
+    hex.capture_features = !a.no_capture_features;
+    if let Some(f) = a.pin_uncovered {
+        if !(f.is_finite() && f >= 0.0) {
+            return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));
+        }
+        hex.pin_uncovered = f;
+    }
+    for (name, value, goal) in [("--goal-min-sj", a.goal_min_sj, &mut hex.goals.min_scaled_jacobian), ("--goal-mean-sj", a.goal_mean_sj, &mut hex.goals.mean_scaled_jacobian)] {
+        if let Some(s) = value {
+            if !(s > -1.0 && s <= 1.0) {
+                return Err(Error::InvalidArgument(format!("{name} must be a scaled Jacobian in (-1, 1], got {s}")));
+            }
+            *goal = s;
+        }
+    }
+    if let Some(d) = a.goal_hausdorff {
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(Error::InvalidArgument(format!("--goal-hausdorff must be a finite fraction of the bounding-box diagonal > 0, got {d}")));
+        }
+        hex.goals.hausdorff = d;
+    }
+    if let Some(n) = a.max_elements {
+        if n == 0 {
+            return Err(Error::InvalidArgument("--max-elements must be at least 1, got 0".into()));
+        }
+        hex.max_elements = n;
+    }
+    Ok(())
 }
 
 pub fn run(a: &RunArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
+    let mut opts = RunOptions::default();
+    hex_options(a, &mut opts.hex)?;
     let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
     let model = load_model(&p.weights)?;
     std::fs::create_dir_all(&p.output).map_err(|e| Error::io(p.output.display(), e))?;
-    let mut opts = RunOptions { polycube: options_of(p), ..Default::default() };
-    opts.hex.level = a.level;
+    opts.polycube = options_of(p);
     if a.no_spline {
         opts.spline = None;
     }
@@ -56,28 +112,17 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     if let Some(n) = a.hex_candidates {
         opts.hex_candidates = n;
     }
-    if let Some(n) = a.voxel_resolution {
-        if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
-            return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
-        }
-        opts.hex.voxel_resolution = n;
-    }
-    if let Some(n) = a.voxel_refinements {
-        opts.hex.voxel_refinements = n;
-    }
-    opts.hex.capture_features = !a.no_capture_features;
-    if let Some(f) = a.pin_uncovered {
-        if !(f.is_finite() && f >= 0.0) {
-            return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));
-        }
-        opts.hex.pin_uncovered = f;
-    }
     let mut progress = super::common::progress_bar(p.quiet);
     let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
     let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())?;
     if let Some(e) = &r.verification_error {
         if !p.quiet || p.json {
             eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
+        }
+    }
+    if let Some(e) = r.hex_attempts.iter().filter(|t| t.candidate.is_none()).find_map(|t| t.error.as_ref()) {
+        if !p.quiet || p.json {
+            eprintln!("warning: the grid-based fallback was tried and failed ({e}); the hex mesh is the best polycube mesh, which misses the quality goals");
         }
     }
     if p.json {

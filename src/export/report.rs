@@ -258,6 +258,26 @@ th{background:#f2f2f2}.pics img{border:1px solid #ddd;margin:4px;max-width:32%}.
         }
         s.push_str("</table>");
     }
+    // every mesh built for the choice (polycube candidates, the fallback), with why
+    // a build failed: shown when there was a choice or a failure
+    if let Some(att) = hx["candidates_meshed"].as_array().filter(|a| a.len() > 1 || a.iter().any(|x| !x["error"].is_null())) {
+        s.push_str("<h3>Meshes built</h3><table><tr><th>mesh</th><th>inverted</th><th>min SJ</th><th>mean SJ</th><th>Hausdorff / diagonal</th><th>goals missed</th><th>seconds</th><th>error</th></tr>");
+        for a in att {
+            let _ = write!(
+                s,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                num(&a["context"]),
+                num(&a["inverted"]),
+                num(&a["min_scaled_jacobian"]),
+                num(&a["mean_scaled_jacobian"]),
+                num(&a["hausdorff_relative"]),
+                num(&a["goals_missed"]),
+                num(&a["seconds"]),
+                if a["error"].is_null() { String::new() } else { num(&a["error"]) }
+            );
+        }
+        s.push_str("</table>");
+    }
     if !sp.is_null() {
         s.push_str("<h2>Spline</h2>");
         s.push_str(&table(&[

@@ -33,7 +33,8 @@ pub struct SddpmHexOptions {
     pub max_level: u32,
     /// Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
     pub threshold: f64,
-    /// Most elements before pillowing (default 200000).
+    /// Most elements before pillowing (default 200000): caps the automatic level (not
+    /// below min_level) and the fallback's lattices.
     pub max_elements: usize,
     /// Dihedral angle in degrees above which an input edge is a feature (default 40).
     pub feature_angle: f64,

@@ -85,7 +85,9 @@ pub struct HexOptions {
     /// The stopping rule also stops when the measure of a level is above this fraction
     /// of the previous level's (refining no longer helps; default 0.75).
     pub stall_ratio: f64,
-    /// The level is capped so that the mesh has at most this many elements before pillowing (default 200 000).
+    /// Most elements before pillowing (default 200 000): the stopping rule's level is
+    /// capped by it (but not below `min_level`), and the fallback's lattices have at
+    /// most this many voxels (none within it: the fallback fails, MESHING_FAILED).
     pub max_elements: usize,
     /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
     pub feature_angle: f64,
