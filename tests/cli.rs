@@ -184,6 +184,19 @@ fn run_refuses_a_genus_inconsistent_context_before_diffusion() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `sddpm batch` takes `sddpm run`'s hex-stage options, checked before any file is read.
+#[test]
+fn batch_checks_the_hex_options_of_run() {
+    let out = std::env::temp_dir().join(format!("sddpm-cli-batch-opts-{}", std::process::id()));
+    for bad in [&["--max-elements", "0"][..], &["--goal-hausdorff", "inf"][..], &["--voxel-resolution", "500"][..]] {
+        let args: Vec<&str> = ["batch", "tests/data/meshes", "-o", out.to_str().unwrap(), "-q"].into_iter().chain(bad.iter().copied()).collect();
+        let (code, _, err) = sddpm(&args);
+        assert_eq!(code, 2, "{bad:?}: {err}");
+        assert!(err.starts_with("error: ") && err.contains(bad[0]), "{err}");
+    }
+    assert!(!out.exists(), "nothing is written for bad options");
+}
+
 /// `sddpm batch`: every mesh of a folder, in parallel, with a summary; a bad file is
 /// a row with its status, not the end of the batch.
 #[test]

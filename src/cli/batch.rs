@@ -46,6 +46,8 @@ pub struct BatchArgs {
     /// No per-file lines on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub hex: super::run::HexArgs,
 }
 
 fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions) -> Result<Value> {
@@ -58,6 +60,9 @@ fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptio
 
 pub fn run(a: &BatchArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
+    let mut opts = RunOptions::default();
+    opts.hex.level = a.level;
+    super::run::hex_options(&a.hex, &mut opts.hex)?;
     let mut files: Vec<PathBuf> = std::fs::read_dir(&a.dir)
         .map_err(|e| Error::io(a.dir.display(), e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -69,13 +74,11 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
     }
     std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
     let model = load_model(&a.weights)?;
-    let mut opts = RunOptions::default();
     opts.polycube.seed = a.seed;
     opts.polycube.sampler.seed = a.seed;
     if let Some(st) = a.steps {
         opts.polycube.sampler.steps = st;
     }
-    opts.hex.level = a.level;
     opts.accept_unverified = !a.strict;
     opts.require_valid_hex = a.strict;
     if a.no_spline {

@@ -24,6 +24,13 @@ pub struct RunArgs {
     /// How many candidates are meshed (verified ones, else unverified ones by fit); the best mesh is kept (default 4).
     #[arg(long)]
     pub hex_candidates: Option<usize>,
+    #[command(flatten)]
+    pub hex: HexArgs,
+}
+
+/// The hex stage's options, shared by `sddpm run` and `sddpm batch`.
+#[derive(clap::Args, Debug)]
+pub struct HexArgs {
     /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
     #[arg(long)]
     pub voxel_resolution: Option<usize>,
@@ -50,10 +57,9 @@ pub struct RunArgs {
     pub max_elements: Option<usize>,
 }
 
-/// The hex-stage options of `sddpm run`'s arguments on top of `hex`, each checked
-/// (an out-of-range value is an error naming the option).
-fn hex_options(a: &RunArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> {
-    hex.level = a.level;
+/// The hex-stage options of the arguments on top of `hex`, each checked (an
+/// out-of-range value is an error naming the option).
+pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> {
     if let Some(n) = a.voxel_resolution {
         if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
             return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
@@ -97,7 +103,8 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
     let mut opts = RunOptions::default();
-    hex_options(a, &mut opts.hex)?;
+    opts.hex.level = a.level;
+    hex_options(&a.hex, &mut opts.hex)?;
     let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
