@@ -137,13 +137,16 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     } else if !p.quiet {
         let h = &j["hex"];
         eprintln!(
-            "polycube {} ({} of {} candidates verified); hex: {} elements, min scaled Jacobian {:.3}, {} inverted; {}wrote {} in {:.1} s",
+            "polycube {} ({} of {} candidates verified); hex ({}): {} elements, min scaled Jacobian {:.3}, mean {:.3}, {} inverted, Hausdorff {:.2} % of the diagonal; {}wrote {} in {:.1} s",
             j["polycube"]["names"].as_str().unwrap_or("?"),
             j["polycube"]["verified"],
             j["polycube"]["candidates"],
+            r.hex.domain,
             h["elements"],
             h["min_scaled_jacobian"].as_f64().unwrap_or(f64::NAN),
+            h["mean_scaled_jacobian"].as_f64().unwrap_or(f64::NAN),
             h["inverted"],
+            100.0 * r.hex.hausdorff_relative,
             if j["spline"].is_null() { String::new() } else { format!("spline: {} basis functions; ", j["spline"]["basis_functions"]) },
             p.output.display(),
             t0.elapsed().as_secs_f64()
