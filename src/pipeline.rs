@@ -152,9 +152,11 @@ pub struct HexAttempt {
     /// How far it falls short of them ([`crate::hex::QualityGoals::shortfall`]).
     pub goal_shortfall: f64,
     pub seconds: f64,
-    /// Why the build failed (its figures are then NaN, null in report.json): a
-    /// candidate whose mesh could not be built, or a fallback with no lattice of
-    /// the input's topology within `HexOptions::max_elements`.
+    /// Why the build failed: a candidate whose mesh could not be built, or a
+    /// fallback with no lattice of the input's topology within
+    /// `HexOptions::max_elements`. Its scaled-Jacobian, distance and shortfall
+    /// figures are then NaN (null in report.json), `inverted` 0 and
+    /// `goals_missed` 3.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
