@@ -117,6 +117,8 @@ fn run_takes_the_fallback_options() {
     let dir = std::env::temp_dir().join(format!("sddpm-cli-fallback-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_str().unwrap();
+    // the last run's report.json
+    let last_report = || -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap() };
     let common = ["run", "tests/data/meshes/hexgen_hepta.obj", "-o", d, "--labels", "cube,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--no-spline", "--json", "-q"];
     // a looser distance goal (2.5 %) that the first lattice meets: no finer one
     // follows (the default goal, 1 %, refines it; hepta at 12 voxels with the
@@ -128,7 +130,7 @@ fn run_takes_the_fallback_options() {
     assert_eq!(v["hex"]["domain"], "voxel 12", "{}", v["hex"]);
     assert_eq!(v["hex"]["inverted"], 0);
     assert!(v["hex"]["hausdorff_relative"].as_f64().unwrap() < 0.025, "{}", v["hex"]);
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let report = last_report();
     let meshed = report["hex"]["stages"][0]["details"]["lattices_meshed"].as_array().unwrap();
     assert_eq!(meshed.len(), 1, "{meshed:?}");
     let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
@@ -142,7 +144,7 @@ fn run_takes_the_fallback_options() {
     let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features"]).collect();
     let (code, _, err) = sddpm(&args);
     assert_eq!(code, 0, "{err}");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let report = last_report();
     let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
     assert!(!stages.contains(&"capture") && !stages.contains(&"recapture"), "{stages:?}");
     // --max-elements below any lattice of the input's topology: the fallback fails,
@@ -151,7 +153,7 @@ fn run_takes_the_fallback_options() {
     let (code, _, err) = sddpm(&args);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("grid-based fallback was tried and failed") && err.contains("100 elements"), "{err}");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let report = last_report();
     let built = report["hex"]["candidates_meshed"].as_array().unwrap();
     let fallback = built.iter().find(|a| a["candidate"].is_null()).expect("the fallback's attempt");
     assert!(fallback["error"].as_str().is_some_and(|e| e.contains("100 elements")), "{fallback}");

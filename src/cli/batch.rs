@@ -22,9 +22,6 @@ pub struct BatchArgs {
     /// Files meshed at once (default: the number of cores).
     #[arg(short = 'j', long)]
     pub jobs: Option<usize>,
-    /// Fix the octree subdivision level.
-    #[arg(long)]
-    pub level: Option<u32>,
     /// Stop after the hex mesh.
     #[arg(long)]
     pub no_spline: bool,
@@ -61,7 +58,6 @@ fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptio
 pub fn run(a: &BatchArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let mut opts = RunOptions::default();
-    opts.hex.level = a.level;
     super::run::hex_options(&a.hex, &mut opts.hex)?;
     let mut files: Vec<PathBuf> = std::fs::read_dir(&a.dir)
         .map_err(|e| Error::io(a.dir.display(), e))?

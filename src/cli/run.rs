@@ -11,9 +11,6 @@ use sddpm::Result;
 pub struct RunArgs {
     #[command(flatten)]
     pub polycube: PolycubeArgs,
-    /// Fix the octree subdivision level (default: chosen by the stopping rule).
-    #[arg(long)]
-    pub level: Option<u32>,
     /// Stop after the hex mesh (no spline.bext / model.k).
     #[arg(long)]
     pub no_spline: bool,
@@ -31,6 +28,9 @@ pub struct RunArgs {
 /// The hex stage's options, shared by `sddpm run` and `sddpm batch`.
 #[derive(clap::Args, Debug)]
 pub struct HexArgs {
+    /// Fix the octree subdivision level (default: chosen by the stopping rule).
+    #[arg(long)]
+    pub level: Option<u32>,
     /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
     #[arg(long)]
     pub voxel_resolution: Option<usize>,
@@ -60,6 +60,7 @@ pub struct HexArgs {
 /// The hex-stage options of the arguments on top of `hex`, each checked (an
 /// out-of-range value is an error naming the option).
 pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> {
+    hex.level = a.level;
     if let Some(n) = a.voxel_resolution {
         if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
             return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
@@ -103,7 +104,6 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
     let mut opts = RunOptions::default();
-    opts.hex.level = a.level;
     hex_options(&a.hex, &mut opts.hex)?;
     let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
