@@ -28,6 +28,8 @@ fn main() -> sddpm::Result<()> {
         if let Ok(v) = std::env::var("HEX_CAPTURE") {
             opts.capture_features = v != "0";
         }
+        // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
+        opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
         if let Some(g) = std::env::var("HEX_HAUSDORFF").ok().and_then(|s| s.parse().ok()) {
             opts.goals.hausdorff = g;

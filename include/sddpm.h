@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 /* Version of the C ABI this header declares; compare with sddpm_abi_version(). */
-#define SDDPM_ABI_VERSION 2
+#define SDDPM_ABI_VERSION 3
 
 // Fixed status numbers (mirrored by `sddpm_status` in include/sddpm.h).
 enum sddpm_status
@@ -189,6 +189,10 @@ typedef struct sddpm_hex_options {
   // Sharp-edge capture steps (after smoothing and after the optimisation):
   // boundary nodes near the input's sharp edges go onto them (default true).
   bool capture_features;
+  // Local refinement rounds of the fallback: the voxels around the points
+  // farthest from its mesh split 3 x 3 x 3 with conforming transition elements
+  // (default 0: off). ABI 3.
+  uint32_t local_refinement;
 } sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short

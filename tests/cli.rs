@@ -140,13 +140,17 @@ fn run_takes_the_fallback_options() {
     let d = &re["details"];
     assert_eq!(d["kept"], serde_json::json!(true), "{d}");
     assert!(d["hausdorff_relative_after"].as_f64().unwrap() < d["hausdorff_relative_before"].as_f64().unwrap(), "{d}");
-    // --no-capture-features: neither capture step
-    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features"]).collect();
+    // --no-capture-features: neither capture step; --local-refinement 1: the
+    // 12-voxel lattice is meshed a second time with some voxels split
+    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features", "--local-refinement", "1"]).collect();
     let (code, _, err) = sddpm(&args);
     assert_eq!(code, 0, "{err}");
     let report = last_report();
     let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
     assert!(!stages.contains(&"capture") && !stages.contains(&"recapture"), "{stages:?}");
+    let meshed = report["hex"]["stages"][0]["details"]["lattices_meshed"].as_array().unwrap();
+    assert_eq!(meshed.len(), 2, "{meshed:?}");
+    assert!(meshed.iter().all(|m| m["resolution"] == 12) && meshed[1]["elements"].as_u64() > meshed[0]["elements"].as_u64(), "{meshed:?}");
     // --max-elements below any lattice of the input's topology: the fallback fails,
     // the polycube mesh is kept and the failure is reported, not dropped
     let args: Vec<&str> = common.iter().copied().chain(["--max-elements", "100"]).collect();
@@ -190,7 +194,7 @@ fn run_refuses_a_genus_inconsistent_context_before_diffusion() {
 #[test]
 fn batch_checks_the_hex_options_of_run() {
     let out = std::env::temp_dir().join(format!("sddpm-cli-batch-opts-{}", std::process::id()));
-    for bad in [&["--max-elements", "0"][..], &["--goal-hausdorff", "inf"][..], &["--voxel-resolution", "500"][..]] {
+    for bad in [&["--max-elements", "0"][..], &["--goal-hausdorff", "inf"][..], &["--voxel-resolution", "500"][..], &["--local-refinement", "x"][..]] {
         let args: Vec<&str> = ["batch", "tests/data/meshes", "-o", out.to_str().unwrap(), "-q"].into_iter().chain(bad.iter().copied()).collect();
         let (code, _, err) = sddpm(&args);
         assert_eq!(code, 2, "{bad:?}: {err}");

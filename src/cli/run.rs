@@ -43,6 +43,9 @@ pub struct HexArgs {
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
+    /// Local refinement: up to N rounds that split the fallback's voxels around the points farthest from its mesh 3 x 3 x 3, with conforming transition elements (off by default; docs/hex.md).
+    #[arg(long, value_name = "N")]
+    pub local_refinement: Option<usize>,
     /// Quality goal: smallest acceptable minimum scaled Jacobian, in (-1, 1] (default 0.3). Meshes are ranked by the goals they miss; the fallback refines its lattice while the best misses one.
     #[arg(long, value_name = "S")]
     pub goal_min_sj: Option<f64>,
@@ -71,6 +74,9 @@ pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> 
         hex.voxel_refinements = n;
     }
     hex.capture_features = !a.no_capture_features;
+    if let Some(n) = a.local_refinement {
+        hex.local_refinement = n;
+    }
     if let Some(f) = a.pin_uncovered {
         if !(f.is_finite() && f >= 0.0) {
             return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));

@@ -74,6 +74,10 @@ pub struct SddpmHexOptions {
     /// Sharp-edge capture steps (after smoothing and after the optimisation):
     /// boundary nodes near the input's sharp edges go onto them (default true).
     pub capture_features: bool,
+    /// Local refinement rounds of the fallback: the voxels around the points
+    /// farthest from its mesh split 3 x 3 x 3 with conforming transition elements
+    /// (default 0: off). ABI 3.
+    pub local_refinement: u32,
 }
 
 /// Quality summary of a hex mesh.
@@ -149,6 +153,7 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
             voxel_refinements: h.voxel_refinements as u32,
             pin_uncovered: h.pin_uncovered,
             capture_features: h.capture_features,
+            local_refinement: h.local_refinement as u32,
         };
         Ok(())
     }
@@ -194,6 +199,7 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     h.voxel_refinements = o.voxel_refinements as usize;
     h.pin_uncovered = o.pin_uncovered;
     h.capture_features = o.capture_features;
+    h.local_refinement = o.local_refinement as usize;
     h.goals = crate::hex::QualityGoals {
         min_scaled_jacobian: o.goal_min_scaled_jacobian,
         mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
@@ -483,8 +489,9 @@ mod tests {
         }
         let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
         assert!(e.contains("voxel_resolution 1"), "{e}");
-        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, ..o })).unwrap();
-        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features), (0, 0.6, false));
+        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, local_refinement: 3, ..o })).unwrap();
+        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features, h.local_refinement), (0, 0.6, false, 3));
+        assert_eq!(o.local_refinement, 0);
         assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, true));
         for bad in [f64::NAN, -0.1, f64::INFINITY] {
             let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();

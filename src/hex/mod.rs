@@ -10,6 +10,7 @@ pub mod optimize;
 pub mod pillow;
 pub mod pipeline;
 pub mod quality;
+pub mod refine;
 pub mod report;
 pub mod surface;
 pub mod topology;
