@@ -173,7 +173,7 @@ pub struct HexOptions {
     /// Grid-based fallback, local refinement rounds: after the lattices, the best
     /// lattice is meshed again up to this many times, each time with the voxels
     /// around the points farthest from the last mesh (input vertices and boundary
-    /// nodes at least 0.7 times the largest distance away) added to the voxels split
+    /// nodes at least 0.8 times the largest distance away) added to the voxels split
     /// 3 x 3 x 3 with conforming transition elements ([`super::refine`]); a round's
     /// mesh is kept when it ranks better by [`QualityGoals::rank`]; the rounds stop
     /// at `max_elements` or once the best meets every goal. Each round meshes the

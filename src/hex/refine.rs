@@ -21,7 +21,7 @@
 //! Coordinates are lattice units (one voxel = 1); template points lie on a grid of
 //! twelfths, so shared nodes are found by their exact position.
 
-use super::topology::HEX_FACES;
+use crate::geometry::vec3::{cross, dot, sub};
 use std::collections::HashMap;
 
 /// Template points in twelfths of a lattice cell.
@@ -228,7 +228,8 @@ fn refine_flags(nodes: &[[u32; 3]], elements: &[[u32; 8]], flags: &[bool]) -> Re
             m == mk
         });
         let Some(sym) = sym else {
-            // not a face or an edge (cannot happen with a box of marked nodes)
+            // two corners not on an edge, four not on a face: refine_marked closes
+            // the marks so that this does not happen
             out_elements.push(*el);
             continue;
         };
@@ -247,33 +248,20 @@ fn refine_flags(nodes: &[[u32; 3]], elements: &[[u32; 8]], flags: &[bool]) -> Re
                 })
             });
             // a mirror turns the element inside out: read it from the other face
-            let v = |k: usize| out_nodes[pts[k] as usize];
-            let e = |k: usize| -> [f64; 3] { std::array::from_fn(|a| v(k)[a] - v(0)[a]) };
-            let (x, y, z) = (e(1), e(3), e(4));
-            let det = x[0] * (y[1] * z[2] - y[2] * z[1]) - x[1] * (y[0] * z[2] - y[2] * z[0]) + x[2] * (y[0] * z[1] - y[1] * z[0]);
+            let e = |k: usize| sub(out_nodes[pts[k] as usize], out_nodes[pts[0] as usize]);
+            let det = dot(e(1), cross(e(3), e(4)));
             out_elements.push(if det > 0.0 { pts } else { [pts[4], pts[5], pts[6], pts[7], pts[0], pts[1], pts[2], pts[3]] });
         }
     }
     Refined { nodes: out_nodes, elements: out_elements, split, transitions }
 }
 
-/// Faces used by one element of `elements` (for the tests and the callers' boundary).
-pub fn face_use(elements: &[[u32; 8]]) -> HashMap<[u32; 4], usize> {
-    let mut count = HashMap::new();
-    for el in elements {
-        for f in HEX_FACES {
-            let mut k = f.map(|i| el[i]);
-            k.sort_unstable();
-            *count.entry(k).or_insert(0) += 1;
-        }
-    }
-    count
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::hex::quality::scaled_jacobian;
+    use crate::hex::topology::{boundary_quads, hex_volume as volume};
+    use crate::hex::HexMesh;
 
     fn lattice(n: u32) -> (Vec<[u32; 3]>, Vec<[u32; 8]>) {
         let id = |i: u32, j: u32, k: u32| (k * (n + 1) + j) * (n + 1) + i;
@@ -296,13 +284,14 @@ mod tests {
         (nodes, els)
     }
 
-    fn volume(p: &[[f64; 3]; 8]) -> f64 {
-        // six tetrahedra around the diagonal 0-6
-        let t = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
-            let (x, y, z) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]], [d[0] - a[0], d[1] - a[1], d[2] - a[2]]);
-            (x[0] * (y[1] * z[2] - y[2] * z[1]) - x[1] * (y[0] * z[2] - y[2] * z[0]) + x[2] * (y[0] * z[1] - y[1] * z[0])) / 6.0
-        };
-        [[1, 2], [2, 3], [3, 7], [7, 4], [4, 5], [5, 1]].iter().map(|[a, b]| t(p[0], p[*a], p[*b], p[6])).sum()
+    /// Faces used once are on the outside of the n-cell lattice, none is used
+    /// more than twice (conforming).
+    fn assert_conforming(r: &Refined, n: f64, what: &str) {
+        let bq = boundary_quads(&HexMesh { nodes: r.nodes.clone(), elements: r.elements.clone() }).unwrap_or_else(|e| panic!("{what}: {e}"));
+        for q in bq {
+            let p = q.nodes.map(|i| r.nodes[i as usize]);
+            assert!((0..3).any(|a| p.iter().all(|x| x[a] == 0.0) || p.iter().all(|x| x[a] == n)), "{what}: face {p:?} used once");
+        }
     }
 
     #[test]
@@ -324,11 +313,7 @@ mod tests {
         for (lo, hi) in [([1, 1, 1], [3, 3, 3]), ([0, 0, 0], [2, 5, 1]), ([2, 2, 2], [2, 3, 4]), ([1, 2, 3], [4, 3, 5])] {
             let r = refine_box(&nodes, &els, lo, hi);
             // every face is used once (on the outside of the lattice) or twice
-            for (f, c) in face_use(&r.elements) {
-                let p = f.map(|i| r.nodes[i as usize]);
-                let outside = (0..3).any(|a| p.iter().all(|q| q[a] == 0.0) || p.iter().all(|q| q[a] == 5.0));
-                assert!(c == 2 || (c == 1 && outside), "box {lo:?}-{hi:?}: face {p:?} used {c} times");
-            }
+            assert_conforming(&r, 5.0, &format!("box {lo:?}-{hi:?}"));
             let mut vol = 0.0;
             for el in &r.elements {
                 let p = el.map(|i| r.nodes[i as usize]);
@@ -348,11 +333,7 @@ mod tests {
         // between the first two get all their corners marked, the rest is as marked
         for boxes in [vec![([0, 0, 0], [1, 1, 1]), ([2, 2, 2], [3, 3, 3]), ([5, 0, 5], [6, 1, 6])], vec![([0, 0, 0], [2, 1, 1]), ([1, 2, 0], [2, 3, 1])], vec![([1, 1, 1], [2, 2, 2]), ([3, 1, 1], [4, 2, 2])]] {
             let r = refine_boxes(&nodes, &els, &boxes);
-            for (f, c) in face_use(&r.elements) {
-                let p = f.map(|i| r.nodes[i as usize]);
-                let outside = (0..3).any(|a| p.iter().all(|q| q[a] == 0.0) || p.iter().all(|q| q[a] == 6.0));
-                assert!(c == 2 || (c == 1 && outside), "{boxes:?}: face {p:?} used {c} times");
-            }
+            assert_conforming(&r, 6.0, &format!("{boxes:?}"));
             assert!(r.elements.iter().all(|el| scaled_jacobian(&el.map(|i| r.nodes[i as usize])) > 0.49));
             let vol: f64 = r.elements.iter().map(|el| volume(&el.map(|i| r.nodes[i as usize]))).sum();
             assert!((vol - 216.0).abs() < 1e-9, "{vol}");
