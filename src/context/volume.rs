@@ -80,6 +80,13 @@ pub fn voxelize(mesh: &TriMesh, resolution: usize) -> Result<VoxelVolume> {
     let h = longest / resolution as f64;
     let dims: [usize; 3] = std::array::from_fn(|a| ((size[a] / h).ceil() as usize).max(1));
     let lo: [f64; 3] = std::array::from_fn(|a| bb.centre()[a] - dims[a] as f64 * h / 2.0);
+    Ok(VoxelVolume { lo, h, grid: voxelize_on(mesh, lo, h, dims) })
+}
+
+/// Fill the aligned surface on the lattice of `dims` voxels of size `h` from `lo`
+/// (a voxel is inside when its centre is inside along at least two of the three
+/// axis rays through it).
+pub fn voxelize_on(mesh: &TriMesh, lo: [f64; 3], h: f64, dims: [usize; 3]) -> VoxelGrid {
     let bvh = Bvh::new(mesh);
     let mut votes = vec![0u8; dims[0] * dims[1] * dims[2]];
     let idx = |x: usize, y: usize, z: usize| x + dims[0] * (y + dims[1] * z);
@@ -111,7 +118,7 @@ pub fn voxelize(mesh: &TriMesh, resolution: usize) -> Result<VoxelVolume> {
         }
     }
     let occ = votes.iter().map(|&v| v >= 2).collect();
-    Ok(VoxelVolume { lo, h, grid: VoxelGrid { dims, occ } })
+    VoxelGrid { dims, occ }
 }
 
 /// The fraction of each voxel of `vol`'s lattice that lies inside `mesh`, from

@@ -177,11 +177,13 @@ pub struct HexOptions {
     /// 3 x 3 x 3 with conforming transition elements ([`super::refine`]); a round's
     /// mesh is kept when it ranks better by [`QualityGoals::rank`]; the rounds stop
     /// at `max_elements` or once the best meets every goal. Each round meshes the
-    /// refined lattice twice (new nodes started on the lattice and on the fitted
-    /// coarse mesh) and keeps the better. Default 0 (off): on hexgen_rod at 24
-    /// voxels, 1,001 elements at 2.09 % -> 2,769 at 0.90 % in three rounds (the
-    /// default fallback needs 48 voxels, 5,723 elements), but on hexgen_hepta at 12
-    /// voxels no round beats the plain lattice (BENCHMARKS.md "Local refinement").
+    /// refined lattice three times (new nodes started on the lattice, on the fitted
+    /// coarse mesh, and the split voxels voxelised again at the fine size) and keeps
+    /// the best. Default 0 (off): on hexgen_rod at 28 voxels, 1,519 elements at
+    /// 1.27 % -> 1,777 at 0.84 % in one round (the default fallback needs 48
+    /// voxels, 5,723 elements), but the mean scaled Jacobian drops below its goal
+    /// (0.833) and on hexgen_hepta at 12 voxels no round beats the plain lattice
+    /// (BENCHMARKS.md "Local refinement").
     pub local_refinement: usize,
 }
 

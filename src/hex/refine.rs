@@ -157,6 +157,14 @@ fn has_template(m: [bool; 8]) -> bool {
 /// merged into their bounding box); returns the refined mesh and how many nodes
 /// that marked.
 pub fn refine_marked(nodes: &[[u32; 3]], elements: &[[u32; 8]], mut marked: Vec<bool>) -> (Refined, usize) {
+    let added = close_marks(elements, &mut marked);
+    (refine_flags(nodes, elements, &marked), added)
+}
+
+/// The closure of [`refine_marked`]: every element whose marked corners have no
+/// template gets all its corners marked, until none is left; returns how many
+/// nodes that marked.
+pub fn close_marks(elements: &[[u32; 8]], marked: &mut [bool]) -> usize {
     let mut added = 0;
     loop {
         let mut changed = false;
@@ -176,7 +184,38 @@ pub fn refine_marked(nodes: &[[u32; 3]], elements: &[[u32; 8]], mut marked: Vec<
             break;
         }
     }
-    (refine_flags(nodes, elements, &marked), added)
+    added
+}
+
+/// Boxes of lattice nodes (inclusive) merged into their bounding boxes until every
+/// two are at least two lattice steps apart along some axis: then no cell has
+/// corners in two boxes, every cell's marked corners are a corner, an edge, a face
+/// or all of one box's, and [`refine_marked`]'s closure has nothing to mark (which
+/// around overlapping boxes can spread over a whole lattice plane: each corner it
+/// marks past a box face gives the cells beside it five marked corners).
+pub fn merge_boxes(boxes: &[([u32; 3], [u32; 3])]) -> Vec<([u32; 3], [u32; 3])> {
+    let mut out: Vec<([u32; 3], [u32; 3])> = boxes.to_vec();
+    loop {
+        let mut merged = false;
+        'pairs: for i in 0..out.len() {
+            for j in i + 1..out.len() {
+                let (a, b) = (out[i], out[j]);
+                // apart when some axis has a gap of two or more lattice steps
+                let apart = (0..3).any(|k| a.0[k] >= b.1[k] + 2 || b.0[k] >= a.1[k] + 2);
+                if !apart {
+                    out[i] = (std::array::from_fn(|k| a.0[k].min(b.0[k])), std::array::from_fn(|k| a.1[k].max(b.1[k])));
+                    out.swap_remove(j);
+                    merged = true;
+                    break 'pairs;
+                }
+            }
+        }
+        if !merged {
+            break;
+        }
+    }
+    out.sort_unstable();
+    out
 }
 
 /// [`refine_box`] for several boxes (see [`refine_marked`]).
@@ -186,7 +225,7 @@ pub fn refine_boxes(nodes: &[[u32; 3]], elements: &[[u32; 8]], boxes: &[([u32; 3
 }
 
 /// The refinement itself: every element's marked corners must have a template.
-fn refine_flags(nodes: &[[u32; 3]], elements: &[[u32; 8]], flags: &[bool]) -> Refined {
+pub fn refine_flags(nodes: &[[u32; 3]], elements: &[[u32; 8]], flags: &[bool]) -> Refined {
     let marked = |v: u32| flags[v as usize];
     let syms = Sym::all();
     let templates: [(Vec<[P; 8]>, Vec<usize>); 3] = [
@@ -343,5 +382,26 @@ mod tests {
         let marked: Vec<bool> = nodes.iter().map(|p| *p == [1, 1, 1] || *p == [2, 2, 2]).collect();
         let (_, added) = refine_marked(&nodes, &els, marked);
         assert_eq!(added, 6, "the cell between two diagonal nodes");
+    }
+
+    #[test]
+    fn merged_boxes_are_apart_and_need_no_closure() {
+        let (nodes, els) = lattice(8);
+        // two overlapping, one touching them, two a step apart; the first three
+        // and the last two become one box each
+        let boxes = [([1, 1, 1], [2, 2, 2]), ([2, 2, 1], [3, 3, 2]), ([3, 1, 1], [4, 2, 2]), ([6, 6, 6], [7, 7, 7]), ([4, 4, 4], [5, 5, 5])];
+        let m = merge_boxes(&boxes);
+        assert_eq!(m, vec![([1, 1, 1], [4, 3, 2]), ([4, 4, 4], [7, 7, 7])]);
+        for b in &boxes {
+            assert!(m.iter().any(|(lo, hi)| (0..3).all(|a| lo[a] <= b.0[a] && b.1[a] <= hi[a])), "{b:?} in a merged box");
+        }
+        let marked: Vec<bool> = nodes.iter().map(|p| m.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))).collect();
+        let (r, added) = refine_marked(&nodes, &els, marked);
+        assert_eq!(added, 0, "every cell's marks have a template");
+        assert_conforming(&r, 8.0, "merged");
+        assert_eq!(r.split, 3 * 2 * 1 + 27);
+        // unmerged, the closure spreads past the boxes' bounding box
+        let marked: Vec<bool> = nodes.iter().map(|p| boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))).collect();
+        assert!(refine_marked(&nodes, &els, marked).1 > 0);
     }
 }
