@@ -172,7 +172,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     // (and the predicted coarser lattice)
     let share = 1.0 / (2 + opts.voxel_refinements) as f64;
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: share };
-    let mut best = mesh_lattice(lattice, res, &[], false, None, &fr, opts, t_all, &mut sub)?;
+    let mut best = mesh_lattice(lattice, res, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
     let mut best_res = res;
     let mut meshed = vec![(res, best.quality.elements, best.quality.min, best.quality.mean, best.hausdorff_relative)];
     // the lattice the next step starts from: the best so far, or the finer one that
@@ -194,7 +194,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         };
         let Some(lattice) = lattice else { break };
         let mut sub = SubProgress { inner: progress, lo: share * k as f64, hi: share * (k + 1) as f64 };
-        let r = mesh_lattice(lattice, next, &[], false, None, &fr, opts, t_all, &mut sub)?;
+        let r = mesh_lattice(lattice, next, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
         meshed.push((next, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
         if !opts.goals.beats(&r, Some(&best)) {
             // finer ranked worse. When it misses the distance goal as well, one more
@@ -232,7 +232,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
             let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, genus, opts, &mut tried)?;
             if let Some(lattice) = lattice {
                 let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
-                let r = mesh_lattice(lattice, predicted, &[], false, None, &fr, opts, t_all, &mut sub)?;
+                let r = mesh_lattice(lattice, predicted, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
                 meshed.push((predicted, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
                 if opts.goals.missed(&r) == 0 {
                     best = r;
@@ -250,6 +250,8 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         if let Some(lattice) = lattice {
             let mut boxes: Vec<([u32; 3], [u32; 3])> = Vec::new();
             let mut from = best.mesh.clone();
+            // the coarse lattice fitted to the surface, for the fitted start of every round
+            let mut fit_cache = None;
             for _ in 0..opts.local_refinement {
                 if opts.goals.missed(&best) == 0 {
                     break;
@@ -267,12 +269,12 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
                 // one; hexgen_rod at 28 voxels 1,777 elements at 0.84 % where the
                 // others give 1,741 at 1.10 %); BENCHMARKS.md "Local refinement"
                 let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
-                let a = mesh_lattice(lattice.clone(), best_res, &boxes, false, None, &fr, opts, t_all, &mut sub)?;
-                let b = mesh_lattice(lattice.clone(), best_res, &boxes, true, None, &fr, opts, t_all, &mut sub)?;
+                let a = mesh_lattice(lattice.clone(), best_res, &boxes, false, None, &mut fit_cache, &fr, opts, t_all, &mut sub)?;
+                let b = mesh_lattice(lattice.clone(), best_res, &boxes, true, None, &mut fit_cache, &fr, opts, t_all, &mut sub)?;
                 let mut r = if opts.goals.beats(&b, Some(&a)) { b } else { a };
                 match carve_refined(&lattice.vol, &boxes, &fr.sw.mesh, genus) {
                     Ok(c) => {
-                        let c = mesh_lattice(lattice.clone(), best_res, &boxes, false, Some(c), &fr, opts, t_all, &mut sub)?;
+                        let c = mesh_lattice(lattice.clone(), best_res, &boxes, false, Some(c), &mut fit_cache, &fr, opts, t_all, &mut sub)?;
                         if opts.goals.beats(&c, Some(&r)) {
                             r = c;
                         }
@@ -575,6 +577,7 @@ fn mesh_lattice(
     refine: &[([u32; 3], [u32; 3])],
     from_fitted: bool,
     carved: Option<Carved>,
+    fit_cache: &mut Option<(Work, Vec<super::optimize::FitStats>)>,
     fr: &super::pipeline::Frames,
     opts: &HexOptions,
     t_all: Instant,
@@ -591,7 +594,17 @@ fn mesh_lattice(
     let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
     let coarse = HexMesh { nodes: pos, elements: h.mesh.elements.clone() };
     // the lattice fitted to the surface (not needed when a refined lattice starts on the lattice)
-    let fitted = (refine.is_empty() || from_fitted).then(|| fitted_work(coarse, role, &bquads, vec![[vol.h; 3]; h.mesh.elements.len()], sw, opts));
+    // (the same for every round of local refinement: `fit_cache` keeps it)
+    let fitted = (refine.is_empty() || from_fitted).then(|| match fit_cache {
+        Some(f) => f.clone(),
+        None => {
+            let f = fitted_work(coarse, role, &bquads, vec![[vol.h; 3]; h.mesh.elements.len()], sw, opts);
+            if !refine.is_empty() {
+                *fit_cache = Some(f.clone());
+            }
+            f
+        }
+    });
     let mut refined = serde_json::Value::Null;
     let (h, work, fit_stats, bquads, targets) = if refine.is_empty() {
         let (work, fit_stats) = fitted.expect("fitted above");
