@@ -498,8 +498,7 @@ fn carve_refined(vol: &crate::context::volume::VoxelVolume, boxes: &[([u32; 3], 
     let fine_in = crate::context::volume::voxelize_on(mesh, vol.lo, vol.h / 3.0, fdims);
     let mut fine = VoxelGrid::empty(fdims);
     let mut fine_removed = 0;
-    for (e, c) in h.elem_lattice.iter().enumerate() {
-        let _ = e;
+    for c in &h.elem_lattice {
         let is_split = split.occ[split.idx(c[0] as usize, c[1] as usize, c[2] as usize)];
         for k in 0..27usize {
             let f = [3 * c[0] as usize + k % 3, 3 * c[1] as usize + k / 3 % 3, 3 * c[2] as usize + k / 9];
