@@ -218,9 +218,14 @@ pub fn merge_boxes(boxes: &[([u32; 3], [u32; 3])]) -> Vec<([u32; 3], [u32; 3])> 
     out
 }
 
+/// Whether lattice node `p` lies in one of the boxes of lattice nodes (inclusive).
+pub fn in_boxes(p: [u32; 3], boxes: &[([u32; 3], [u32; 3])]) -> bool {
+    boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))
+}
+
 /// [`refine_box`] for several boxes (see [`refine_marked`]).
 pub fn refine_boxes(nodes: &[[u32; 3]], elements: &[[u32; 8]], boxes: &[([u32; 3], [u32; 3])]) -> Refined {
-    let marked = nodes.iter().map(|p| boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))).collect();
+    let marked = nodes.iter().map(|&p| in_boxes(p, boxes)).collect();
     refine_marked(nodes, elements, marked).0
 }
 
@@ -395,13 +400,13 @@ mod tests {
         for b in &boxes {
             assert!(m.iter().any(|(lo, hi)| (0..3).all(|a| lo[a] <= b.0[a] && b.1[a] <= hi[a])), "{b:?} in a merged box");
         }
-        let marked: Vec<bool> = nodes.iter().map(|p| m.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))).collect();
+        let marked: Vec<bool> = nodes.iter().map(|&p| in_boxes(p, &m)).collect();
         let (r, added) = refine_marked(&nodes, &els, marked);
         assert_eq!(added, 0, "every cell's marks have a template");
         assert_conforming(&r, 8.0, "merged");
         assert_eq!(r.split, 3 * 2 * 1 + 27);
         // unmerged, the closure spreads past the boxes' bounding box
-        let marked: Vec<bool> = nodes.iter().map(|p| boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))).collect();
+        let marked: Vec<bool> = nodes.iter().map(|&p| in_boxes(p, &boxes)).collect();
         assert!(refine_marked(&nodes, &els, marked).1 > 0);
     }
 }

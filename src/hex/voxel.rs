@@ -172,7 +172,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     // (and the predicted coarser lattice)
     let share = 1.0 / (2 + opts.voxel_refinements) as f64;
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: share };
-    let mut best = mesh_lattice(lattice, res, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
+    let mut best = mesh_lattice(lattice, res, None, &fr, opts, t_all, &mut sub)?;
     let mut best_res = res;
     let mut meshed = vec![(res, best.quality.elements, best.quality.min, best.quality.mean, best.hausdorff_relative)];
     // the lattice the next step starts from: the best so far, or the finer one that
@@ -194,7 +194,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         };
         let Some(lattice) = lattice else { break };
         let mut sub = SubProgress { inner: progress, lo: share * k as f64, hi: share * (k + 1) as f64 };
-        let r = mesh_lattice(lattice, next, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
+        let r = mesh_lattice(lattice, next, None, &fr, opts, t_all, &mut sub)?;
         meshed.push((next, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
         if !opts.goals.beats(&r, Some(&best)) {
             // finer ranked worse. When it misses the distance goal as well, one more
@@ -232,7 +232,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
             let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, genus, opts, &mut tried)?;
             if let Some(lattice) = lattice {
                 let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
-                let r = mesh_lattice(lattice, predicted, &[], false, None, &mut None, &fr, opts, t_all, &mut sub)?;
+                let r = mesh_lattice(lattice, predicted, None, &fr, opts, t_all, &mut sub)?;
                 meshed.push((predicted, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
                 if opts.goals.missed(&r) == 0 {
                     best = r;
@@ -250,8 +250,10 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         if let Some(lattice) = lattice {
             let mut boxes: Vec<([u32; 3], [u32; 3])> = Vec::new();
             let mut from = best.mesh.clone();
-            // the coarse lattice fitted to the surface, for the fitted start of every round
+            // the coarse lattice fitted to the surface, for the fitted start of every
+            // round, and the fine voxels for the re-voxelised start
             let mut fit_cache = None;
+            let fine_in = fine_voxels(&fr.sw.mesh, &lattice.vol);
             for _ in 0..opts.local_refinement {
                 if opts.goals.missed(&best) == 0 {
                     break;
@@ -269,12 +271,12 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
                 // one; hexgen_rod at 28 voxels 1,777 elements at 0.84 % where the
                 // others give 1,741 at 1.10 %); BENCHMARKS.md "Local refinement"
                 let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
-                let a = mesh_lattice(lattice.clone(), best_res, &boxes, false, None, &mut fit_cache, &fr, opts, t_all, &mut sub)?;
-                let b = mesh_lattice(lattice.clone(), best_res, &boxes, true, None, &mut fit_cache, &fr, opts, t_all, &mut sub)?;
+                let a = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Lattice)), &fr, opts, t_all, &mut sub)?;
+                let b = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Fitted(&mut fit_cache))), &fr, opts, t_all, &mut sub)?;
                 let mut r = if opts.goals.beats(&b, Some(&a)) { b } else { a };
-                match carve_refined(&lattice.vol, &boxes, &fr.sw.mesh, genus) {
+                match carve_refined(&lattice.vol, &boxes, &fine_in, genus) {
                     Ok(c) => {
-                        let c = mesh_lattice(lattice.clone(), best_res, &boxes, false, Some(c), &mut fit_cache, &fr, opts, t_all, &mut sub)?;
+                        let c = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Revoxelised(c))), &fr, opts, t_all, &mut sub)?;
                         if opts.goals.beats(&c, Some(&r)) {
                             r = c;
                         }
@@ -456,17 +458,23 @@ struct Carved {
     fine_filled: usize,
 }
 
+/// The voxels of `mesh` on `vol`'s lattice split 3 x 3 x 3 (the same for every
+/// round of local refinement).
+fn fine_voxels(mesh: &TriMesh, vol: &crate::context::volume::VoxelVolume) -> VoxelGrid {
+    crate::context::volume::voxelize_on(mesh, vol.lo, vol.h / 3.0, vol.grid.dims.map(|d| 3 * d))
+}
+
 /// Local refinement with re-voxelisation: the lattice's voxels in `boxes` (boxes of
 /// lattice nodes; with the empty voxels whose corners all lie in a box) are split
 /// 3 x 3 x 3 with conforming transitions around them ([`super::refine`]), and of
-/// their fine voxels only those whose centre is inside `mesh` (made well-composed
+/// their fine voxels only those inside the surface (`fine_in`, [`fine_voxels`]; made well-composed
 /// by filling fine voxels of split voxels) are kept: the refined region follows
 /// the surface at the fine voxel size instead of keeping the coarse staircase. Err
 /// (why) when the fine solid cannot be made well-composed within the split voxels
 /// or does not have the input's topology (one component, no cavity, `genus`).
-fn carve_refined(vol: &crate::context::volume::VoxelVolume, boxes: &[([u32; 3], [u32; 3])], mesh: &TriMesh, genus: i64) -> std::result::Result<Carved, String> {
+fn carve_refined(vol: &crate::context::volume::VoxelVolume, boxes: &[([u32; 3], [u32; 3])], fine_in: &VoxelGrid, genus: i64) -> std::result::Result<Carved, String> {
     let dims = vol.grid.dims;
-    let in_box = |p: [u32; 3]| boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]));
+    let in_box = |p: [u32; 3]| super::refine::in_boxes(p, boxes);
     let mut all = vol.grid.clone();
     let mut empty_split = 0;
     for z in 0..dims[2] {
@@ -485,17 +493,15 @@ fn carve_refined(vol: &crate::context::volume::VoxelVolume, boxes: &[([u32; 3], 
     super::refine::close_marks(&h.mesh.elements, &mut marked);
     // the voxels split 3 x 3 x 3 (every corner marked)
     let mut split = VoxelGrid::empty(dims);
-    for (e, el) in h.mesh.elements.iter().enumerate() {
+    for (el, c) in h.mesh.elements.iter().zip(&h.elem_lattice) {
+        let i = split.idx(c[0] as usize, c[1] as usize, c[2] as usize);
         if el.iter().all(|&v| marked[v as usize]) {
-            let c = h.elem_lattice[e];
-            let i = split.idx(c[0] as usize, c[1] as usize, c[2] as usize);
             split.occ[i] = true;
-        } else if !vol.grid.occ[vol.grid.idx(h.elem_lattice[e][0] as usize, h.elem_lattice[e][1] as usize, h.elem_lattice[e][2] as usize)] {
+        } else if !vol.grid.occ[i] {
             return Err("an empty voxel joined the refinement without being split".into());
         }
     }
     let fdims = dims.map(|d| 3 * d);
-    let fine_in = crate::context::volume::voxelize_on(mesh, vol.lo, vol.h / 3.0, fdims);
     let mut fine = VoxelGrid::empty(fdims);
     let mut fine_removed = 0;
     for c in &h.elem_lattice {
@@ -568,15 +574,27 @@ fn fitted_work(mesh: HexMesh, role: Vec<Role>, bquads: &[[u32; 4]], target: Vec<
     (work, fit_stats)
 }
 
-/// The hex mesh of one lattice: boundary nodes onto the surface, then the usual
-/// quality steps ([`finish`]).
+/// A lattice fitted to the surface, with the fit's statistics ([`fitted_work`]).
+type CoarseFit = (Work, Vec<super::optimize::FitStats>);
+
+/// Where a locally refined lattice's mesh starts.
+enum Start<'a> {
+    /// Every node on the lattice.
+    Lattice,
+    /// The new nodes on the fitted coarse mesh, which the cache keeps for the
+    /// next round.
+    Fitted(&'a mut Option<CoarseFit>),
+    /// The split voxels voxelised again ([`carve_refined`]), on the lattice.
+    Revoxelised(Carved),
+}
+
+/// The hex mesh of one lattice, or with `refine` of the lattice with the voxels in
+/// those boxes split (local refinement): boundary nodes onto the surface, then
+/// the usual quality steps ([`finish`]).
 fn mesh_lattice(
     Lattice { vol, filled, thin_wall }: Lattice,
     res: usize,
-    refine: &[([u32; 3], [u32; 3])],
-    from_fitted: bool,
-    carved: Option<Carved>,
-    fit_cache: &mut Option<(Work, Vec<super::optimize::FitStats>)>,
+    refine: Option<(&[([u32; 3], [u32; 3])], Start)>,
     fr: &super::pipeline::Frames,
     opts: &HexOptions,
     t_all: Instant,
@@ -592,37 +610,30 @@ fn mesh_lattice(
     let role: Vec<Role> = masks.iter().map(|&m| if m != 0 { Role::Free } else { Role::Interior }).collect();
     let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
     let coarse = HexMesh { nodes: pos, elements: h.mesh.elements.clone() };
-    // the lattice fitted to the surface (not needed when a refined lattice starts on the lattice)
-    // (the same for every round of local refinement: `fit_cache` keeps it)
-    let fitted = (refine.is_empty() || from_fitted).then(|| match fit_cache {
-        Some(f) => f.clone(),
-        None => {
-            let f = fitted_work(coarse, role, &bquads, vec![[vol.h; 3]; h.mesh.elements.len()], sw, opts);
-            if !refine.is_empty() {
-                *fit_cache = Some(f.clone());
-            }
-            f
-        }
-    });
+    // the lattice fitted to the surface (not needed when a refined lattice starts
+    // on the lattice; the same for every round of local refinement, so cached)
+    let fit = || fitted_work(coarse, role, &bquads, vec![[vol.h; 3]; h.mesh.elements.len()], sw, opts);
+    let (fitted, refine) = match refine {
+        None => (Some(fit()), None),
+        Some((boxes, Start::Fitted(cache))) => (Some(cache.get_or_insert_with(fit).clone()), Some((boxes, None))),
+        Some((boxes, Start::Lattice)) => (None, Some((boxes, None))),
+        Some((boxes, Start::Revoxelised(c))) => (None, Some((boxes, Some(c)))),
+    };
     let mut refined = serde_json::Value::Null;
-    let (h, work, fit_stats, bquads, targets) = if refine.is_empty() {
-        let (work, fit_stats) = fitted.expect("fitted above");
-        let targets = work.target.clone();
-        (h, work, fit_stats, bquads, targets)
-    } else {
+    let (h, work, fit_stats, bquads, targets) = if let Some((boxes, carved)) = refine {
         // Local refinement: the refined lattice starts from the lattice, or
-        // (`from_fitted`) from the fitted coarse mesh, each new node where its
+        // (`Start::Fitted`) from the fitted coarse mesh, each new node where its
         // cell's trilinear map of the fitted corners puts it, so its boundary nodes
         // have only the rest of the way to go
-        let start = if carved.is_some() { "re-voxelised lattice" } else if from_fitted { "fitted coarse mesh" } else { "lattice" };
+        let start = if carved.is_some() { "re-voxelised lattice" } else if fitted.is_some() { "fitted coarse mesh" } else { "lattice" };
         let (r, carve) = match carved {
             Some(c) => {
                 let j = serde_json::json!({ "empty_voxels_split": c.empty_split, "fine_voxels_removed": c.fine_removed, "fine_voxels_filled": c.fine_filled });
                 (c.refined, j)
             }
-            None => (super::refine::refine_boxes(&h.node_lattice, &h.mesh.elements, refine), serde_json::Value::Null),
+            None => (super::refine::refine_boxes(&h.node_lattice, &h.mesh.elements, boxes), serde_json::Value::Null),
         };
-        refined = serde_json::json!({ "boxes": refine, "elements_split": r.split, "transition_elements": r.transitions, "start": start });
+        refined = serde_json::json!({ "boxes": boxes, "elements_split": r.split, "transition_elements": r.transitions, "start": start });
         if !carve.is_null() {
             refined["revoxelised"] = carve;
         }
@@ -673,6 +684,10 @@ fn mesh_lattice(
         fit_stats.extend(f);
         let mut h = h;
         h.mesh = mesh;
+        (h, work, fit_stats, bquads, targets)
+    } else {
+        let (work, fit_stats) = fitted.expect("fitted above");
+        let targets = work.target.clone();
         (h, work, fit_stats, bquads, targets)
     };
     let n = work.mesh.nodes.len();
@@ -931,7 +946,7 @@ mod tests {
         let cell = |p: [f64; 3]| -> [u32; 3] { std::array::from_fn(|a| ((p[a] - vol.lo[a]) / vol.h).floor() as u32) };
         let (a, b) = (cell([16.46, 0.718, 4.13]), cell([16.46, 2.674, 4.127]));
         let boxes = super::super::refine::merge_boxes(&[(a, a.map(|c| c + 1)), (b, b.map(|c| c + 1))]);
-        let c = carve_refined(&vol, &boxes, &mesh, genus).unwrap();
+        let c = carve_refined(&vol, &boxes, &fine_voxels(&mesh, &vol), genus).unwrap();
         let r = &c.refined;
         assert!(r.split > 0 && r.transitions > 0 && c.fine_removed > 0, "{} {} {}", r.split, r.transitions, c.fine_removed);
         // the solid is the coarse voxels and the split voxels' kept fine voxels
