@@ -243,8 +243,9 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     // Local refinement (HexOptions::local_refinement): the best lattice again, with
     // the voxels around the points farthest from the last mesh split 3 x 3 x 3
     let mut carve_failed: Vec<String> = Vec::new();
-    // (index in `meshed`, the start of the local refinement round's kept mesh)
-    let mut round_starts: Vec<(usize, serde_json::Value)> = Vec::new();
+    // (index in `meshed`, the start of the local refinement round's kept mesh, the
+    // figures of every start's mesh)
+    let mut round_starts: Vec<(usize, serde_json::Value, Vec<serde_json::Value>)> = Vec::new();
     if opts.local_refinement > 0 && best.hausdorff_relative > 0.0 {
         let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, genus, opts, &mut tried)?;
         if let Some(lattice) = lattice {
@@ -272,11 +273,14 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
                 // others give 1,741 at 1.10 %); BENCHMARKS.md "Local refinement"
                 let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
                 let a = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Lattice)), &fr, opts, t_all, &mut sub)?;
+                let mut starts = vec![start_figures(&a)];
                 let b = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Fitted(&mut fit_cache))), &fr, opts, t_all, &mut sub)?;
+                starts.push(start_figures(&b));
                 let mut r = if opts.goals.beats(&b, Some(&a)) { b } else { a };
                 match carve_refined(&lattice.vol, &boxes, &fine_in, genus) {
                     Ok(c) => {
                         let c = mesh_lattice(lattice.clone(), best_res, Some((&boxes, Start::Revoxelised(c))), &fr, opts, t_all, &mut sub)?;
+                        starts.push(start_figures(&c));
                         if opts.goals.beats(&c, Some(&r)) {
                             r = c;
                         }
@@ -285,7 +289,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
                 }
                 meshed.push((best_res, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
                 let start = r.stages.first().map(|s| s.details["local_refinement"]["start"].clone()).unwrap_or_default();
-                round_starts.push((meshed.len() - 1, start));
+                round_starts.push((meshed.len() - 1, start, starts));
                 if r.quality.elements > opts.max_elements {
                     break;
                 }
@@ -300,8 +304,9 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         .iter()
         .map(|&(res, elements, min, mean, hausdorff)| serde_json::json!({ "resolution": res, "elements": elements, "min_scaled_jacobian": min, "mean_scaled_jacobian": mean, "hausdorff_relative": hausdorff }))
         .collect();
-    for (i, start) in round_starts {
+    for (i, start, starts) in round_starts {
         meshed[i]["local_refinement_start"] = start;
+        meshed[i]["local_refinement_starts"] = serde_json::Value::Array(starts);
     }
     if let Some(d) = best.stages.first_mut().and_then(|s| s.details.as_object_mut()) {
         d.insert("resolutions_tried".into(), serde_json::json!(tried));
@@ -314,6 +319,19 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     best.seconds_total = t_all.elapsed().as_secs_f64();
     check_progress(progress, 1.0, "hex: done")?;
     Ok(best)
+}
+
+/// A local refinement round's mesh from one start, for report.json: the start and
+/// the figures the meshes of a round are ranked by.
+fn start_figures(r: &HexResult) -> serde_json::Value {
+    serde_json::json!({
+        "start": r.stages.first().map(|s| s.details["local_refinement"]["start"].clone()).unwrap_or_default(),
+        "elements": r.quality.elements,
+        "inverted": r.quality.inverted,
+        "min_scaled_jacobian": r.quality.min,
+        "mean_scaled_jacobian": r.quality.mean,
+        "hausdorff_relative": r.hausdorff_relative,
+    })
 }
 
 /// The fallback's last lattice, which the next resolution is chosen from.
@@ -916,6 +934,13 @@ mod tests {
         let meshed = d["lattices_meshed"].as_array().unwrap();
         assert!(meshed.len() == 4 && meshed.iter().all(|m| m["resolution"] == 24), "{meshed:?}");
         assert!(meshed[1..].iter().all(|m| m["local_refinement_start"].is_string()), "{meshed:?}");
+        // every round lists its starts' meshes (two or three: the re-voxelised one
+        // only when the fine solid has the input's topology), the kept one among them
+        for m in &meshed[1..] {
+            let starts = m["local_refinement_starts"].as_array().unwrap();
+            assert!((2..=3).contains(&starts.len()), "{m:?}");
+            assert!(starts.iter().any(|s| s["start"] == m["local_refinement_start"] && s["elements"] == m["elements"] && s["hausdorff_relative"] == m["hausdorff_relative"]), "{m:?}");
+        }
         let plain = &meshed[0];
         // the refined mesh is the one returned: within the distance goal, closer
         // by more than half, valid, with under half the default fallback's elements
