@@ -4,7 +4,7 @@
 
 use sddpm::context::Context;
 use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
-use sddpm::diffusion::train::{read_loss_csv, train, TrainConfig, TrainEvent};
+use sddpm::diffusion::train::{read_loss_csv, train, TrainConfig};
 use sddpm::diffusion::{Backend, Model, DEFAULT_WEIGHTS};
 use sddpm::error::NoProgress;
 use sddpm::polycube::dataset::{item_rng, sample_cells};
@@ -20,17 +20,17 @@ fn tiny_config() -> TrainConfig {
     c
 }
 
-fn tiny_model(dir: &std::path::Path) -> Model {
-    let out = dir.join("tiny.sddpmw");
-    let mut last = Vec::new();
-    train(&tiny_config(), &out, None, &mut |e| {
-        if let TrainEvent::Log(r) = e {
-            last.push(r.loss);
-        }
-        true
-    })
-    .unwrap();
-    Model::from_file(&out, Backend::Flex).unwrap()
+/// The tiny model every test below starts from, trained once per test binary (the
+/// tests run in threads of one process; each trained its own copy before, the same
+/// weights seven times over) and loaded afresh for each test from its file's bytes.
+fn tiny_model() -> Model {
+    static WEIGHTS: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    let bytes = WEIGHTS.get_or_init(|| {
+        let out = tempdir("tiny").join("tiny.sddpmw");
+        train(&tiny_config(), &out, None, &mut |_| true).unwrap();
+        std::fs::read(&out).unwrap()
+    });
+    Model::from_bytes(bytes, Backend::Flex).unwrap()
 }
 
 #[test]
@@ -61,8 +61,7 @@ fn a_tiny_model_overfits_a_handful_of_samples() {
 
 #[test]
 fn save_load_and_embed_round_trips_are_bit_identical() {
-    let dir = tempdir("roundtrip");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let bytes = m.to_bytes().unwrap();
     let m2 = Model::from_bytes(&bytes, Backend::Flex).unwrap();
     assert_eq!(m.meta, m2.meta);
@@ -117,8 +116,7 @@ fn half_precision_weights_are_half_the_size_and_predict_the_same_noise() {
     // a trained f32 model rounded to f16: binary16 keeps 11 significant bits (relative
     // rounding 2^-11 = 4.9e-4 per weight); through the network and 4 sampler steps
     // the outputs agree to 1e-2 of the cell scale
-    let dir = tempdir("half");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let h = Model::from_bytes(&m.to_bytes_f16().unwrap(), Backend::Flex).unwrap();
     let a = reverse_diffusion(&m, &[x.clone()], &[ctx], &opts, &mut NoProgress).unwrap();
     let b = reverse_diffusion(&h, &[x], &[ctx], &opts, &mut NoProgress).unwrap();
@@ -149,8 +147,7 @@ fn template_prior_is_the_fixed_seed_sample_and_its_warm_start_changes_nothing() 
     }
     // the prior's input convolution starts at zero: the same weights loaded into the
     // architecture with the prior predict the same noise
-    let dir = tempdir("prior");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let mut cfg = m.meta.model.clone();
     cfg.prior = true;
     let rec = sddpm::diffusion::net_bytes(&m.net).unwrap();
@@ -169,8 +166,7 @@ fn template_prior_is_the_fixed_seed_sample_and_its_warm_start_changes_nothing() 
 #[test]
 fn guidance_combines_the_conditional_and_unlabelled_predictions() {
     use burn::tensor::{Tensor, TensorData};
-    let dir = tempdir("guidance");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let ctx = Context::parse("THC+X,cube,0,0,0,0,0,0,0,0,0,0").unwrap();
     let mut rng = item_rng(2, 2);
     let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
@@ -213,8 +209,7 @@ fn guidance_combines_the_conditional_and_unlabelled_predictions() {
 #[cfg(feature = "ndarray")]
 #[test]
 fn flex_and_ndarray_agree_on_the_same_weights() {
-    let dir = tempdir("parity");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let bytes = m.to_bytes().unwrap();
     let nd = Model::from_bytes(&bytes, Backend::Ndarray).unwrap();
     let ctx = Context::parse("BHC+X,THC+Y,0,0,0,0,0,0,0,0,0,0").unwrap();
@@ -244,8 +239,7 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
     use burn::tensor::{Tensor, TensorData};
     use sddpm::diffusion::model::{prior_image, KERNEL_RHO0, KERNEL_SIGMA0};
     use sddpm::polycube::tensor::{flat, slot};
-    let dir = tempdir("kernel");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let ctx = Context::parse("THC+Z,cube,BHC+X,0,0,0,0,0,0,0,0,0").unwrap();
     let mut cfg = m.meta.model.clone();
     cfg.kernel = true;
@@ -322,8 +316,7 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
 
 #[test]
 fn non_finite_sampler_weights_are_refused() {
-    let dir = tempdir("nonfinite");
-    let m = tiny_model(&dir);
+    let m = tiny_model();
     let ctx = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
     let mut rng = item_rng(3, 3);
     let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
