@@ -621,8 +621,7 @@ fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]
     // corners where cinolib_cube_minus_sphere's sphere cuts the cube's edges), nodes
     // held on the rest of the curves cannot follow them there (30 voxels: 0.87 ->
     // 1.22 %), and the capture steps do better
-    let at_corner: Vec<Option<usize>> = corners.iter().map(|(p, _)| bnodes.iter().map(|&v| v as usize).find(|&v| w.role[v] == Role::Free && norm(sub(w.mesh.nodes[v], *p)) <= ON)).collect();
-    if at_corner.iter().any(Option::is_none) {
+    if !corners.iter().all(|(p, _)| bnodes.iter().any(|&v| w.role[v as usize] == Role::Free && norm(sub(w.mesh.nodes[v as usize], *p)) <= ON)) {
         return 0;
     }
     let on_curve = |x: [f64; 3]| -> Vec<usize> { curves.iter().filter(|(_, b)| b.dist2(x) <= ON * ON).map(|&(c, _)| c).filter(|&c| sw.closest_on_curve(c, x).distance <= ON).collect() };
