@@ -288,8 +288,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
                     Err(why) => carve_failed.push(why),
                 }
                 meshed.push((best_res, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
-                let start = r.stages.first().map(|s| s.details["local_refinement"]["start"].clone()).unwrap_or_default();
-                round_starts.push((meshed.len() - 1, start, starts));
+                round_starts.push((meshed.len() - 1, refinement_start(&r), starts));
                 if r.quality.elements > opts.max_elements {
                     break;
                 }
@@ -321,11 +320,16 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     Ok(best)
 }
 
+/// Where a locally refined mesh started (its mapping details' `local_refinement.start`).
+fn refinement_start(r: &HexResult) -> serde_json::Value {
+    r.stages.first().map(|s| s.details["local_refinement"]["start"].clone()).unwrap_or_default()
+}
+
 /// A local refinement round's mesh from one start, for report.json: the start and
 /// the figures the meshes of a round are ranked by.
 fn start_figures(r: &HexResult) -> serde_json::Value {
     serde_json::json!({
-        "start": r.stages.first().map(|s| s.details["local_refinement"]["start"].clone()).unwrap_or_default(),
+        "start": refinement_start(r),
         "elements": r.quality.elements,
         "inverted": r.quality.inverted,
         "min_scaled_jacobian": r.quality.min,
@@ -602,9 +606,9 @@ fn fitted_work(mesh: HexMesh, role: Vec<Role>, bquads: &[[u32; 4]], target: Vec<
 /// rounds the edges the lattice had exactly (the square torus at 24 voxels: corners
 /// 1.2 voxels off after the fit, 1.20 % from the input in the end). Only when
 /// every feature corner has a node on it (the input's features all on the
-/// lattice); "on" is within 1e-9 of the working frame's size 2. Returns how many
-/// nodes are held.
-fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]) -> usize {
+/// lattice); "on" is within 1e-9 of the working frame's size 2. The held nodes are
+/// those whose role is a corner or a curve.
+fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]) {
     const ON: f64 = 1e-9;
     let corners: Vec<([f64; 3], u32)> = sw.features.corners.iter().map(|&c| (sw.mesh.vertices[c as usize], c)).collect();
     let curves: Vec<(usize, crate::geometry::bvh::Aabb)> = (0..sw.features.curves.len())
@@ -622,10 +626,9 @@ fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]
     // held on the rest of the curves cannot follow them there (30 voxels: 0.87 ->
     // 1.22 %), and the capture steps do better
     if !corners.iter().all(|(p, _)| bnodes.iter().any(|&v| w.role[v as usize] == Role::Free && norm(sub(w.mesh.nodes[v as usize], *p)) <= ON)) {
-        return 0;
+        return;
     }
     let on_curve = |x: [f64; 3]| -> Vec<usize> { curves.iter().filter(|(_, b)| b.dist2(x) <= ON * ON).map(|&(c, _)| c).filter(|&c| sw.closest_on_curve(c, x).distance <= ON).collect() };
-    let mut held = 0;
     for &v in &bnodes {
         let v = v as usize;
         if w.role[v] != Role::Free {
@@ -634,12 +637,10 @@ fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]
         let x = w.mesh.nodes[v];
         if let Some(&(_, c)) = corners.iter().find(|(p, _)| norm(sub(*p, x)) <= ON) {
             w.role[v] = Role::Corner(c);
-            held += 1;
             continue;
         }
         if let [c] = on_curve(x)[..] {
             w.role[v] = Role::Curve(c as u32);
-            held += 1;
         }
     }
     for &v in &bnodes {
@@ -657,7 +658,6 @@ fn hold_features(w: &mut Work, sw: &super::surface::Surface, bquads: &[[u32; 4]]
         w.curve_nb[v] = nb;
         w.attach[v] = u32::MAX;
     }
-    held
 }
 
 /// A lattice fitted to the surface, with the fit's statistics ([`fitted_work`]).
@@ -973,6 +973,22 @@ mod tests {
         assert_eq!(next_resolution(LastLattice::Farther { res: 48 }, 24, 0.01), 60);
     }
 
+    /// The boundary quads' edges (with how many quads each is on) and their Euler
+    /// characteristic V - E + F.
+    fn boundary_edges_and_euler(m: &HexMesh) -> (HashMap<(u32, u32), usize>, i64) {
+        let bq = topology::boundary_quads(m).unwrap();
+        let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
+        for q in &bq {
+            for k in 0..4 {
+                let (u, w) = (q.nodes[k], q.nodes[(k + 1) % 4]);
+                *edges.entry((u.min(w), u.max(w))).or_default() += 1;
+            }
+        }
+        let verts: std::collections::HashSet<u32> = bq.iter().flat_map(|q| q.nodes).collect();
+        let chi = verts.len() as i64 - edges.len() as i64 + bq.len() as i64;
+        (edges, chi)
+    }
+
     #[test]
     fn features_on_the_lattice_are_held_and_the_mesh_is_exact() {
         // the square torus (3 x 3 x 1, unit faces) at 24 voxels: every face on a
@@ -1002,10 +1018,7 @@ mod tests {
         let v = torus.signed_volume();
         assert!((r.volume - v).abs() < 0.03 * v, "{} vs {v}", r.volume);
         // genus one: the boundary quads' Euler characteristic V - E + F is 2 - 2g = 0
-        let bq = topology::boundary_quads(&r.mesh).unwrap();
-        let verts: std::collections::BTreeSet<u32> = bq.iter().flat_map(|q| q.nodes).collect();
-        let edges: std::collections::BTreeSet<(u32, u32)> = bq.iter().flat_map(|q| (0..4).map(move |k| (q.nodes[k].min(q.nodes[(k + 1) % 4]), q.nodes[k].max(q.nodes[(k + 1) % 4])))).collect();
-        assert_eq!(verts.len() as i64 - edges.len() as i64 + bq.len() as i64, 0);
+        assert_eq!(boundary_edges_and_euler(&r.mesh).1, 0);
     }
 
     #[test]
@@ -1077,17 +1090,8 @@ mod tests {
             assert!(sj > 0.49, "{sj}");
         }
         // conforming, its boundary a closed 2-manifold of the input's genus
-        let bq = topology::boundary_quads(&hm).unwrap();
-        let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
-        for q in &bq {
-            for k in 0..4 {
-                let (u, w) = (q.nodes[k], q.nodes[(k + 1) % 4]);
-                *edges.entry((u.min(w), u.max(w))).or_default() += 1;
-            }
-        }
+        let (edges, chi) = boundary_edges_and_euler(&hm);
         assert!(edges.values().all(|&n| n == 2), "every boundary edge on two boundary quads");
-        let verts: std::collections::HashSet<u32> = bq.iter().flat_map(|q| q.nodes).collect();
-        let chi = verts.len() as i64 - edges.len() as i64 + bq.len() as i64;
         assert_eq!(chi, 2 - 2 * genus);
         // every node used
         let used: std::collections::HashSet<u32> = r.elements.iter().flatten().copied().collect();
