@@ -4,7 +4,7 @@
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
 //! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
 //! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
-//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library).
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -28,6 +28,10 @@ fn main() -> sddpm::Result<()> {
         if let Ok(v) = std::env::var("HEX_CAPTURE") {
             opts.capture_features = v != "0";
         }
+        // HEX_SHEETS=0: without the feature sheets (HexOptions::feature_sheets, on by default)
+        if let Ok(v) = std::env::var("HEX_SHEETS") {
+            opts.feature_sheets = v != "0";
+        }
         // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
         opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
@@ -46,6 +50,9 @@ fn main() -> sddpm::Result<()> {
         println!("   hausdorff: hex->surface {:.4} surface->hex {:.4} mean {:.5} (relative)", hd.hex_to_surface / diag, hd.surface_to_hex / diag, hd.mean_relative);
         if let Some(l) = r.stages.first().map(|s| &s.details["lattices_meshed"]) {
             println!("   lattices meshed: {l}");
+        }
+        if let Some(f) = r.stages.first().map(|s| &s.details["feature_sheets"]).filter(|f| !f.is_null()) {
+            println!("   feature sheets: {f}");
         }
         if let Some(t) = r.stages.first().and_then(|s| s.details["resolutions_tried"].as_array()) {
             for line in t {

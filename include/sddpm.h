@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 /* Version of the C ABI this header declares; compare with sddpm_abi_version(). */
-#define SDDPM_ABI_VERSION 3
+#define SDDPM_ABI_VERSION 4
 
 // Fixed status numbers (mirrored by `sddpm_status` in include/sddpm.h).
 enum sddpm_status
@@ -193,6 +193,10 @@ typedef struct sddpm_hex_options {
   // farthest from its mesh split 3 x 3 x 3 with conforming transition elements
   // (default 0: off). ABI 3.
   uint32_t local_refinement;
+  // Feature sheets on the fallback's lattice meshes: a sheet of elements under
+  // each surface patch, the nodes between patches onto the input's sharp curves
+  // (default true; docs/hex.md "Feature sheets"). ABI 4.
+  bool feature_sheets;
 } sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short

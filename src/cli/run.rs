@@ -40,6 +40,9 @@ pub struct HexArgs {
     /// No sharp-edge capture (by default boundary nodes near the input's sharp edges go onto them; docs/hex.md).
     #[arg(long)]
     pub no_capture_features: bool,
+    /// No feature sheets (by default the fallback's lattice meshes get a sheet of elements under each surface patch so that their boundary follows the sharp curves; docs/hex.md).
+    #[arg(long)]
+    pub no_feature_sheets: bool,
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
@@ -74,6 +77,7 @@ pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> 
         hex.voxel_refinements = n;
     }
     hex.capture_features = !a.no_capture_features;
+    hex.feature_sheets = !a.no_feature_sheets;
     if let Some(n) = a.local_refinement {
         hex.local_refinement = n;
     }

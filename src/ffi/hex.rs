@@ -78,6 +78,10 @@ pub struct SddpmHexOptions {
     /// farthest from its mesh split 3 x 3 x 3 with conforming transition elements
     /// (default 0: off). ABI 3.
     pub local_refinement: u32,
+    /// Feature sheets on the fallback's lattice meshes: a sheet of elements under
+    /// each surface patch, the nodes between patches onto the input's sharp curves
+    /// (default true; docs/hex.md "Feature sheets"). ABI 4.
+    pub feature_sheets: bool,
 }
 
 /// Quality summary of a hex mesh.
@@ -154,6 +158,7 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
             pin_uncovered: h.pin_uncovered,
             capture_features: h.capture_features,
             local_refinement: h.local_refinement as u32,
+            feature_sheets: h.feature_sheets,
         };
         Ok(())
     }
@@ -200,6 +205,7 @@ fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)>
     h.pin_uncovered = o.pin_uncovered;
     h.capture_features = o.capture_features;
     h.local_refinement = o.local_refinement as usize;
+    h.feature_sheets = o.feature_sheets;
     h.goals = crate::hex::QualityGoals {
         min_scaled_jacobian: o.goal_min_scaled_jacobian,
         mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
@@ -489,9 +495,9 @@ mod tests {
         }
         let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
         assert!(e.contains("voxel_resolution 1"), "{e}");
-        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, local_refinement: 3, ..o })).unwrap();
-        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features, h.local_refinement), (0, 0.6, false, 3));
-        assert_eq!(o.local_refinement, 0);
+        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, local_refinement: 3, feature_sheets: false, ..o })).unwrap();
+        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features, h.local_refinement, h.feature_sheets), (0, 0.6, false, 3, false));
+        assert_eq!((o.local_refinement, o.feature_sheets), (0, true));
         assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, true));
         for bad in [f64::NAN, -0.1, f64::INFINITY] {
             let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();

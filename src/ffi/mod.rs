@@ -25,7 +25,7 @@ pub use model::*;
 pub use spline::*;
 
 /// Version of the C ABI: bumped whenever a declaration in include/sddpm.h changes incompatibly.
-pub const ABI_VERSION: u32 = 3;
+pub const ABI_VERSION: u32 = 4;
 
 /// The panic boundary around every export: runs the body (a closure body whose
 /// value implements [`FfiReturn`]), records errors and panics as the thread's

@@ -12,6 +12,7 @@ pub mod pipeline;
 pub mod quality;
 pub mod refine;
 pub mod report;
+pub mod sheets;
 pub mod surface;
 pub mod topology;
 pub mod voxel;

@@ -185,6 +185,21 @@ pub struct HexOptions {
     /// (0.833) and on hexgen_hepta at 12 voxels no round beats the plain lattice
     /// (BENCHMARKS.md "Local refinement").
     pub local_refinement: usize,
+    /// Feature sheets (lattice meshes, after pillowing): the boundary quads
+    /// labelled with the input patch they lie on (patches: the input split by its
+    /// sharp curves), a sheet of elements inserted under each patch's quads within
+    /// one ring of another label, and the nodes where labels meet put on the sharp
+    /// curve (or the feature corner) between their patches and held there
+    /// ([`super::sheets`]); undone when the smoothing that follows leaves an
+    /// inverted element. The elements along a curve share its dihedral angle two
+    /// by two, so the fallback meshes a lattice with the sheets and, when that
+    /// mesh misses the minimum or mean goal, without them too, and keeps the
+    /// better (docs/hex.md "Feature sheets"). Default true: at 24 voxels
+    /// cgal_joint 1.92 -> 0.30 % and mambo_B0 1.29 -> 0.21 %, both meeting every
+    /// goal (the main job needed 48 and 39 voxels); hexgen_rod at 28 voxels 1.27
+    /// -> 0.67 % but with a minimum of 0.254, so the plain mesh is kept there
+    /// (BENCHMARKS.md "Feature sheets").
+    pub feature_sheets: bool,
 }
 
 impl Default for HexOptions {
@@ -212,6 +227,7 @@ impl Default for HexOptions {
             keep_better_mapped: true,
             pin_uncovered: 0.0,
             capture_features: true,
+            feature_sheets: true,
             local_refinement: 0,
             voxel_fallback: true,
             voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,
@@ -430,6 +446,7 @@ fn flipped_quads(sw: &Surface, pos: &[[f64; 3]], quads: &[[u32; 4]]) -> usize {
         .count()
 }
 
+#[derive(Clone)]
 pub(crate) struct Level {
     pub h: LatticeHex,
     pub pos: Vec<[f64; 3]>,
@@ -646,6 +663,8 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     }
     let lv = chosen.expect("a level is chosen");
     let targets = element_targets(&lv.h, &warp, &to_w);
+    // the feature sheets are for lattice meshes (the polycube map puts nodes on the curves itself)
+    let opts = &HexOptions { feature_sheets: false, ..opts.clone() };
     finish(lv, targets, smap, levels, serde_json::json!({ "fit": fit_stats }), &fr, opts, t_all, progress)
 }
 
@@ -710,6 +729,10 @@ fn pass_reporter<'a, P: Progress + ?Sized>(progress: &'a mut P, lo: f64, span: f
 /// for the capture step to move it (0.5 / 0.75 / 1.0 / 1.5 measured on hepta and
 /// rod at HexGen-like counts: BENCHMARKS.md "Sharp-edge capture").
 const CAPTURE_REACH: f64 = 0.75;
+
+/// How near its sharp curve or corner (in mean boundary edge lengths) a node where
+/// two patch labels meet must be for the feature sheets to put it there.
+const SHEET_REACH: f64 = 1.5;
 
 /// Mean length of the boundary edges of a mesh (0 without a boundary).
 fn mean_boundary_edge(w: &Work) -> f64 {
@@ -840,13 +863,50 @@ pub(crate) fn finish(
         stages.push(stage_report("pillowing", before, &work.mesh, t0, serde_json::to_value(&rep).unwrap_or_default()));
     }
 
+    // ---- feature sheets: a sheet under each surface patch, the paths between
+    // them onto the sharp curves (lattice meshes, whose nodes are not on curves
+    // yet); smoothed at once, undone when the smoothing leaves an inverted element ----
+    let mut smoothed = None;
+    if opts.feature_sheets && opts.pillow && work.role.iter().all(|r| matches!(r, Role::Free | Role::Interior)) && !sw.features.curves.is_empty() {
+        check_progress(progress, 0.58, "hex: feature sheets")?;
+        let t0 = Instant::now();
+        let before = summary(&work.mesh);
+        let saved = work.clone();
+        let reach = SHEET_REACH * mean_boundary_edge(&work);
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach) {
+            Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
+            Err(e) => serde_json::json!({ "error": e.to_string() }),
+        };
+        let inserted = work.mesh.elements.len() > saved.mesh.elements.len();
+        if inserted {
+            let before_smooth = summary(&work.mesh);
+            let t1 = Instant::now();
+            let st: MoveStats = optimize::untangle(&mut work, sw, opts.smooth_iterations, |_| true);
+            let after = summary(&work.mesh);
+            let kept = after.inverted == 0;
+            if let Some(d) = details.as_object_mut() {
+                d.insert("inverted_after_smoothing".into(), serde_json::json!(after.inverted));
+                d.insert("kept".into(), serde_json::json!(kept));
+            }
+            if kept {
+                smoothed = Some(stage_report("smoothing", before_smooth, &work.mesh, t1, serde_json::to_value(st).unwrap_or_default()));
+            } else {
+                work = saved;
+            }
+        }
+        stages.push(stage_report("feature sheets", before, &work.mesh, t0, details));
+    }
     // ---- smoothing: mean-ratio energy of the corners (untangles, then evens out) ----
     check_progress(progress, 0.6, "hex: smoothing")?;
-    let t0 = Instant::now();
-    let before = summary(&work.mesh);
-    let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
-    stages.push(stage_report("smoothing", before, &work.mesh, t0, serde_json::to_value(st).unwrap_or_default()));
-
+    match smoothed {
+        Some(st) => stages.push(st),
+        None => {
+            let t0 = Instant::now();
+            let before = summary(&work.mesh);
+            let st: MoveStats = optimize::untangle(&mut work, &sw, opts.smooth_iterations, |_| true);
+            stages.push(stage_report("smoothing", before, &work.mesh, t0, serde_json::to_value(st).unwrap_or_default()));
+        }
+    }
     // ---- sharp-edge capture: boundary nodes onto the feature curves near them ----
     if opts.capture_features {
         let reach = CAPTURE_REACH * mean_boundary_edge(&work);

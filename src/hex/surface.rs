@@ -215,6 +215,18 @@ impl Surface {
         Surface { mesh, normals, bvh, features, bbox }
     }
 
+    /// Squared distance from `p` to triangle `t`.
+    pub fn dist2_to_triangle(&self, t: u32, p: [f64; 3]) -> f64 {
+        let [a, b, c] = self.tri(t);
+        dist2(p, closest_point_on_triangle(p, a, b, c).0)
+    }
+
+    /// The point of triangle `t` closest to `p`.
+    pub fn closest_on_triangle(&self, t: u32, p: [f64; 3]) -> [f64; 3] {
+        let [a, b, c] = self.tri(t);
+        closest_point_on_triangle(p, a, b, c).0
+    }
+
     fn tri(&self, t: u32) -> [[f64; 3]; 3] {
         self.mesh.triangles[t as usize].map(|v| self.mesh.vertices[v as usize])
     }

@@ -120,7 +120,8 @@ class HexOptions(C.Structure):
                 ("voxel_fallback", C.c_bool), ("voxel_resolution", C.c_uint32),
                 ("goal_min_scaled_jacobian", C.c_double), ("goal_mean_scaled_jacobian", C.c_double),
                 ("goal_hausdorff", C.c_double), ("voxel_refinements", C.c_uint32),
-                ("pin_uncovered", C.c_double), ("capture_features", C.c_bool), ("local_refinement", C.c_uint32)]
+                ("pin_uncovered", C.c_double), ("capture_features", C.c_bool), ("local_refinement", C.c_uint32),
+                ("feature_sheets", C.c_bool)]
 
 
 class HexQuality(C.Structure):

@@ -11,13 +11,14 @@ DATA = pathlib.Path(__file__).resolve().parents[3] / "tests" / "data" / "meshes"
 
 
 def test_versions():
-    assert sddpm.abi_version() == 3
+    assert sddpm.abi_version() == 4
     assert sddpm.version().count(".") == 2
 
 
 def test_hex_options_layout_matches_the_library():
     # ABI 2 appended voxel_refinements, pin_uncovered, capture_features, ABI 3
-    # local_refinement: the library's defaults land in the fields ctypes declares
+    # local_refinement, ABI 4 feature_sheets: the library's defaults land in the
+    # fields ctypes declares
     import ctypes
 
     lib = sddpm.load_library()
@@ -25,7 +26,7 @@ def test_hex_options_layout_matches_the_library():
     assert lib.sddpm_hex_options_default(ctypes.byref(o)) == 0
     assert (o.level, o.voxel_resolution, o.voxel_refinements) == (-1, 24, 2)
     assert (o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff) == (0.3, 0.85, 0.01)
-    assert (o.pin_uncovered, o.capture_features, o.local_refinement) == (0.0, True, 0)
+    assert (o.pin_uncovered, o.capture_features, o.local_refinement, o.feature_sheets) == (0.0, True, 0, True)
 
 
 def test_mesh_load_check_and_arrays():

@@ -1,0 +1,700 @@
+//! Feature sheets: one sheet of hexahedra inserted under each surface patch of a
+//! pillowed lattice mesh, so that its boundary can follow the input's sharp curves
+//! where they run diagonally across the lattice.
+//!
+//! The boundary quads of a lattice mesh meet a sharp curve along a staircase path:
+//! seen on one face of the curve, a quad at a convex step has two consecutive path
+//! edges, and with its three path nodes on a straight curve it is flat (the
+//! capture steps therefore leave such nodes off the curve, and the mesh rounds the
+//! edge). Labelling every boundary quad with the input patch it lies on (patches:
+//! the input's triangles split by its sharp curves) and inserting, under each
+//! patch's quads, a sheet of hexahedra (the pillowing of that patch's layer
+//! elements against the rest of the mesh) gives every node on the path between
+//! two labels exactly one edge into each patch, like a pillow layer does for every
+//! boundary node; the path's nodes then go onto the curve between the two patches
+//! (or onto the feature corner where three labels meet) and are held there, and
+//! the elements along the curve share its dihedral angle two by two.
+//!
+//! The node copies of a sheet are made per face-connected group of the patch's
+//! elements around the node, so that patches touching only along an edge or at a
+//! node still give a conforming mesh; the result is checked (every face on one or
+//! two elements) and the step is undone when it is not.
+
+use super::map::Role;
+use super::optimize::Work;
+use super::surface::Surface;
+use super::topology::{boundary_quads, hex_volume, HEX_FACES};
+use crate::error::{Error, Result};
+use crate::geometry::vec3::*;
+use std::collections::HashMap;
+
+/// The sheets go under the quads within this many rings of a path (one ring:
+/// hexgen_rod at 28 voxels 1,927 elements at 0.68 %; the whole patch: 2,495 at
+/// 0.67 %; BENCHMARKS.md "Feature sheets").
+const SHEET_BAND: usize = 1;
+
+/// Laplacian passes that give the sheets a thickness before the smoothing, over
+/// the new nodes and the old ones within SETTLE_RING edges of a path (hexgen_hepta
+/// at 12 voxels: 8 elements inverted after the smoothing with the new nodes only,
+/// 1 with the first ring).
+const SETTLE_ITERATIONS: usize = 10;
+const SETTLE_RING: usize = 1;
+
+/// What the feature sheets did.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct SheetReport {
+    /// Input patches (triangles split by the sharp curves).
+    pub patches: usize,
+    /// Boundary quads whose label the clean-up changed (isolated quads and islands).
+    pub labels_changed: usize,
+    /// Patches that got a sheet (those whose quads border another label).
+    pub sheets: usize,
+    /// Boundary nodes where labels meet (the paths), and those put on a feature
+    /// curve / a feature corner; the rest stay free on the surface (a path between
+    /// two patches no sharp curve separates, or too far from it).
+    pub path_nodes: usize,
+    pub curve_nodes: usize,
+    pub corner_nodes: usize,
+    pub nodes_added: usize,
+    pub elements_added: usize,
+    /// New elements with a negative signed volume right after the insertion (zero
+    /// thickness counts as neither): the smoothing that follows untangles them.
+    pub negative_volume: usize,
+}
+
+/// The patch of every input triangle: connected components across the edges that
+/// are on no feature curve.
+pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
+    let m = &sw.mesh;
+    let mut sharp = std::collections::HashSet::new();
+    for c in &sw.features.curves {
+        let k = c.vertices.len();
+        let segs = if c.closed { k } else { k.saturating_sub(1) };
+        for s in 0..segs {
+            let (a, b) = (c.vertices[s], c.vertices[(s + 1) % k]);
+            sharp.insert((a.min(b), a.max(b)));
+        }
+    }
+    let mut edge_tri: HashMap<(u32, u32), u32> = HashMap::with_capacity(m.triangles.len() * 2);
+    let mut parent: Vec<u32> = (0..m.triangles.len() as u32).collect();
+    fn find(p: &mut [u32], mut i: u32) -> u32 {
+        while p[i as usize] != i {
+            p[i as usize] = p[p[i as usize] as usize];
+            i = p[i as usize];
+        }
+        i
+    }
+    for (t, tri) in m.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            if sharp.contains(&key) {
+                continue;
+            }
+            if let Some(&u) = edge_tri.get(&key) {
+                let (ra, rb) = (find(&mut parent, u), find(&mut parent, t as u32));
+                if ra != rb {
+                    parent[ra as usize] = rb;
+                }
+            } else {
+                edge_tri.insert(key, t as u32);
+            }
+        }
+    }
+    let mut id = HashMap::new();
+    let patch: Vec<u32> = (0..m.triangles.len() as u32)
+        .map(|t| {
+            let r = find(&mut parent, t);
+            let n = id.len() as u32;
+            *id.entry(r).or_insert(n)
+        })
+        .collect();
+    (patch, id.len())
+}
+
+/// Insert the feature sheets into a pillowed mesh (every boundary quad on its own
+/// element) whose boundary nodes lie on the surface, and put the nodes of the
+/// paths between patch labels onto the curves between them. `reach`: how far (in
+/// the working frame) a path node may be from its curve or corner to be put on it.
+/// Leaves `w` unchanged and returns an error when the mesh is not pillowed or the
+/// result would not be conforming.
+pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64) -> Result<SheetReport> {
+    let mut rep = SheetReport::default();
+    let (tri_patch, np) = triangle_patches(sw);
+    rep.patches = np;
+    if np < 2 {
+        return Ok(rep);
+    }
+    let bq = boundary_quads(&w.mesh).map_err(Error::MeshingFailed)?;
+    let ne0 = w.mesh.elements.len();
+    // every boundary quad on its own element (a pillowed mesh)
+    let mut owner = vec![u32::MAX; ne0];
+    for (k, q) in bq.iter().enumerate() {
+        if owner[q.element as usize] != u32::MAX {
+            return Err(Error::MeshingFailed(format!("feature sheets: element {} has two boundary faces (pillow first)", q.element)));
+        }
+        owner[q.element as usize] = k as u32;
+    }
+    // ---- labels: the patch of the input the quad faces and is nearest to ----
+    let centroid = |q: &[u32; 4]| scale(q.iter().fold([0.0; 3], |a, &i| add(a, w.mesh.nodes[i as usize])), 0.25);
+    let mut label: Vec<u32> = bq
+        .iter()
+        .map(|q| {
+            let p = q.nodes.map(|i| w.mesh.nodes[i as usize]);
+            let n = cross(sub(p[2], p[0]), sub(p[3], p[1]));
+            let l = norm(n);
+            let (_, t, _) = if l > 0.0 { sw.closest_facing(centroid(&q.nodes), scale(n, 1.0 / l), 0.5) } else { sw.closest(centroid(&q.nodes)) };
+            tri_patch[t as usize]
+        })
+        .collect();
+    // quads across each boundary edge
+    let mut edge_q: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(bq.len() * 2);
+    for (k, q) in bq.iter().enumerate() {
+        for i in 0..4 {
+            let (a, b) = (q.nodes[i], q.nodes[(i + 1) % 4]);
+            edge_q.entry((a.min(b), a.max(b))).or_default().push(k as u32);
+        }
+    }
+    let qnb: Vec<Vec<u32>> = bq
+        .iter()
+        .enumerate()
+        .map(|(k, q)| {
+            (0..4)
+                .filter_map(|i| {
+                    let (a, b) = (q.nodes[i], q.nodes[(i + 1) % 4]);
+                    edge_q[&(a.min(b), a.max(b))].iter().copied().find(|&o| o != k as u32)
+                })
+                .collect()
+        })
+        .collect();
+    rep.labels_changed = clean_labels(&mut label, &qnb);
+    // ---- the paths: boundary nodes whose quads carry two labels or more ----
+    let n0 = w.mesh.nodes.len();
+    let mut node_labels: Vec<Vec<u32>> = vec![Vec::new(); n0];
+    for (k, q) in bq.iter().enumerate() {
+        for &v in &q.nodes {
+            let l = &mut node_labels[v as usize];
+            if !l.contains(&label[k]) {
+                l.push(label[k]);
+            }
+        }
+    }
+    let path: Vec<u32> = (0..n0 as u32).filter(|&v| node_labels[v as usize].len() >= 2).collect();
+    rep.path_nodes = path.len();
+    if path.is_empty() {
+        return Ok(rep);
+    }
+    // path edges: boundary edges between quads of two labels
+    let path_nb: HashMap<u32, Vec<u32>> = {
+        let mut m: HashMap<u32, Vec<u32>> = HashMap::new();
+        for (&(a, b), qs) in &edge_q {
+            if qs.len() == 2 && label[qs[0] as usize] != label[qs[1] as usize] {
+                m.entry(a).or_default().push(b);
+                m.entry(b).or_default().push(a);
+            }
+        }
+        m
+    };
+    let saved = w.clone();
+    // ---- one sheet per patch that borders another label ----
+    let mut el_label = vec![u32::MAX; ne0];
+    // only the quads within SHEET_BAND rings of a path
+    let mut ring = vec![usize::MAX; bq.len()];
+    let mut front: Vec<usize> = (0..bq.len()).filter(|&k| bq[k].nodes.iter().any(|&v| node_labels[v as usize].len() >= 2)).collect();
+    for &k in &front {
+        ring[k] = 1;
+    }
+    let mut r = 1;
+    while !front.is_empty() && r < SHEET_BAND {
+        r += 1;
+        let mut next = Vec::new();
+        for &k in &front {
+            for &o in &qnb[k] {
+                if ring[o as usize] == usize::MAX && label[o as usize] == label[k] {
+                    ring[o as usize] = r;
+                    next.push(o as usize);
+                }
+            }
+        }
+        front = next;
+    }
+    for (k, q) in bq.iter().enumerate() {
+        if ring[k] <= SHEET_BAND {
+            el_label[q.element as usize] = label[k];
+        }
+    }
+    let mut bordering: Vec<u32> = path.iter().flat_map(|&v| node_labels[v as usize].iter().copied()).collect();
+    bordering.sort_unstable();
+    bordering.dedup();
+    let mut copy_patch: Vec<u32> = Vec::new();
+    for &p in &bordering {
+        let in_s: Vec<bool> = (0..w.mesh.elements.len()).map(|e| e < ne0 && el_label[e] == p).collect();
+        let (nodes, elements, negative) = insert_sheet(w, &in_s);
+        copy_patch.resize(w.mesh.nodes.len() - n0, p);
+        rep.nodes_added += nodes;
+        rep.elements_added += elements;
+        rep.negative_volume += negative;
+        rep.sheets += 1;
+    }
+    if let Err(e) = boundary_quads(&w.mesh) {
+        *w = saved;
+        return Err(Error::MeshingFailed(format!("feature sheets: {e}")));
+    }
+    // ---- the path nodes onto the curves and corners ----
+    // curves by the pair of patches on their two sides
+    let mut edge_tris: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (t, tri) in sw.mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edge_tris.entry((a.min(b), a.max(b))).or_default().push(t as u32);
+        }
+    }
+    let mut pair_curves: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (c, cv) in sw.features.curves.iter().enumerate() {
+        let mut pairs = std::collections::BTreeSet::new();
+        let k = cv.vertices.len();
+        let segs = if cv.closed { k } else { k.saturating_sub(1) };
+        for s in 0..segs {
+            let (a, b) = (cv.vertices[s], cv.vertices[(s + 1) % k]);
+            if let Some(ts) = edge_tris.get(&(a.min(b), a.max(b))) {
+                if let [t0, t1] = ts[..] {
+                    let (p0, p1) = (tri_patch[t0 as usize], tri_patch[t1 as usize]);
+                    if p0 != p1 {
+                        pairs.insert((p0.min(p1), p0.max(p1)));
+                    }
+                }
+            }
+        }
+        for pr in pairs {
+            pair_curves.entry(pr).or_default().push(c);
+        }
+    }
+    // corners first: each feature corner to the nearest path node within reach,
+    // preferring a node where three labels or more meet
+    let mut taken: HashMap<u32, u32> = HashMap::new();
+    let mut taken_at: Vec<[f64; 3]> = Vec::new();
+    for &k in &sw.features.corners {
+        let cx = sw.mesh.vertices[k as usize];
+        // corners closer together than two thirds of the reach (a face too small for
+        // the lattice): the first only
+        if taken_at.iter().any(|&p| norm(sub(p, cx)) < reach / 1.5) {
+            continue;
+        }
+        let best = |min_labels: usize| {
+            path.iter()
+                .copied()
+                .filter(|&v| node_labels[v as usize].len() >= min_labels && !taken.contains_key(&v))
+                .map(|v| (v, norm(sub(w.mesh.nodes[v as usize], cx))))
+                .filter(|&(_, d)| d <= reach)
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        if let Some((v, _)) = best(3).or_else(|| best(2)) {
+            taken.insert(v, k);
+            taken_at.push(cx);
+        }
+    }
+    for &v in &path {
+        let vi = v as usize;
+        if let Some(&k) = taken.get(&v) {
+            w.role[vi] = Role::Corner(k);
+            w.mesh.nodes[vi] = sw.mesh.vertices[k as usize];
+            w.attach[vi] = u32::MAX;
+            rep.corner_nodes += 1;
+            continue;
+        }
+        let x = w.mesh.nodes[vi];
+        let labs = &node_labels[vi];
+        let mut best: Option<(usize, super::surface::CurvePoint)> = None;
+        for i in 0..labs.len() {
+            for j in i + 1..labs.len() {
+                let key = (labs[i].min(labs[j]), labs[i].max(labs[j]));
+                for &c in pair_curves.get(&key).map(|v| &v[..]).unwrap_or(&[]) {
+                    let cp = sw.closest_on_curve(c, x);
+                    if best.as_ref().is_none_or(|b| cp.distance < b.1.distance) {
+                        best = Some((c, cp));
+                    }
+                }
+            }
+        }
+        match best {
+            Some((c, cp)) if cp.distance <= reach => {
+                w.role[vi] = Role::Curve(c as u32);
+                w.mesh.nodes[vi] = cp.point;
+                w.attach[vi] = u32::MAX;
+                rep.curve_nodes += 1;
+            }
+            _ => {}
+        }
+    }
+    for &v in &path {
+        let Role::Curve(c) = w.role[v as usize] else { continue };
+        w.curve_nb[v as usize] = path_nb
+            .get(&v)
+            .map(|nb| nb.iter().copied().filter(|&u| matches!(w.role[u as usize], Role::Corner(_)) || w.role[u as usize] == Role::Curve(c)).collect())
+            .unwrap_or_default();
+    }
+    w.rebuild();
+    // the new nodes, and the old ones next to a path, where their neighbours put
+    // them (Laplacian; free boundary nodes back onto their own patch), so that
+    // the sheets get a thickness before the untangling smoothing
+    let n1 = w.mesh.nodes.len();
+    let mut patch_of = vec![u32::MAX; n1];
+    for v in n0..n1 {
+        patch_of[v] = copy_patch[v - n0];
+    }
+    for v in 0..n0 {
+        if let [l] = node_labels[v][..] {
+            patch_of[v] = l;
+        }
+    }
+    let mut movable: Vec<bool> = (0..n1).map(|v| v >= n0).collect();
+    let mut front: Vec<u32> = path.clone();
+    for _ in 0..SETTLE_RING {
+        let mut next = Vec::new();
+        for &v in &front {
+            for &u in w.nbr.of(v as usize) {
+                if !movable[u as usize] && matches!(w.role[u as usize], Role::Free | Role::Interior) {
+                    movable[u as usize] = true;
+                    next.push(u);
+                }
+            }
+        }
+        front = next;
+    }
+    for _ in 0..SETTLE_ITERATIONS {
+        for v in (0..n1).filter(|&v| movable[v]) {
+            let nb = w.nbr.of(v);
+            if nb.is_empty() {
+                continue;
+            }
+            let avg = scale(nb.iter().fold([0.0; 3], |a, &u| add(a, w.mesh.nodes[u as usize])), 1.0 / nb.len() as f64);
+            w.mesh.nodes[v] = match (w.role[v], patch_of[v]) {
+                // onto the node's own patch (a point nearer the other face would put
+                // it across the curve)
+                (Role::Free, p) if p != u32::MAX => match sw.bvh.nearest(avg, |t| if tri_patch[t as usize] == p { sw.dist2_to_triangle(t, avg) } else { f64::INFINITY }) {
+                    Some((t, d2)) if d2.is_finite() => sw.closest_on_triangle(t, avg),
+                    _ => sw.closest(avg).0,
+                },
+                (Role::Free, _) => sw.closest(avg).0,
+                _ => avg,
+            };
+            if w.role[v] == Role::Free {
+                w.attach[v] = u32::MAX;
+            }
+        }
+    }
+    Ok(rep)
+}
+
+/// Label clean-up: a quad none of whose neighbours shares its label takes the most
+/// common neighbouring label, and every label keeps only its largest edge-connected
+/// region (an input patch is connected), the rest taking their neighbours' labels.
+/// Returns how many labels changed.
+fn clean_labels(label: &mut [u32], qnb: &[Vec<u32>]) -> usize {
+    let before = label.to_vec();
+    let majority = |label: &[u32], k: usize| -> Option<u32> {
+        let mut count: Vec<(u32, usize)> = Vec::new();
+        for &o in &qnb[k] {
+            let l = label[o as usize];
+            if l == label[k] {
+                continue;
+            }
+            match count.iter_mut().find(|c| c.0 == l) {
+                Some(c) => c.1 += 1,
+                None => count.push((l, 1)),
+            }
+        }
+        count.into_iter().max_by_key(|c| (c.1, std::cmp::Reverse(c.0))).map(|c| c.0)
+    };
+    for _ in 0..4 {
+        let mut changed = false;
+        for k in 0..label.len() {
+            if qnb[k].iter().all(|&o| label[o as usize] != label[k]) {
+                if let Some(l) = majority(label, k) {
+                    label[k] = l;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    for _ in 0..8 {
+        // regions: edge-connected quads of one label
+        let mut region = vec![u32::MAX; label.len()];
+        let mut size: Vec<usize> = Vec::new();
+        let mut region_label: Vec<u32> = Vec::new();
+        for s in 0..label.len() {
+            if region[s] != u32::MAX {
+                continue;
+            }
+            let r = size.len() as u32;
+            let mut stack = vec![s];
+            region[s] = r;
+            let mut n = 0;
+            while let Some(k) = stack.pop() {
+                n += 1;
+                for &o in &qnb[k] {
+                    if region[o as usize] == u32::MAX && label[o as usize] == label[s] {
+                        region[o as usize] = r;
+                        stack.push(o as usize);
+                    }
+                }
+            }
+            size.push(n);
+            region_label.push(label[s]);
+        }
+        let mut largest: HashMap<u32, u32> = HashMap::new();
+        for r in 0..size.len() {
+            let e = largest.entry(region_label[r]).or_insert(r as u32);
+            if size[r] > size[*e as usize] {
+                *e = r as u32;
+            }
+        }
+        let mut changed = false;
+        for k in 0..label.len() {
+            if largest[&label[k]] != region[k] {
+                if let Some(l) = majority(label, k) {
+                    label[k] = l;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    label.iter().zip(&before).filter(|(a, b)| a != b).count()
+}
+
+/// Pillow the elements flagged in `in_s` against the rest of the mesh: every
+/// interior face between a flagged and an unflagged element gets a new element,
+/// its nodes on the flagged side copies that the flagged elements take (one copy
+/// per face-connected group of flagged elements around the node). Copies of
+/// boundary nodes are free boundary nodes, moved a quarter of the way to their
+/// group's centre. Returns the nodes and elements added and how many new elements
+/// have a negative volume.
+fn insert_sheet(w: &mut Work, in_s: &[bool]) -> (usize, usize, usize) {
+    let ne = w.mesh.elements.len();
+    let key = |f: [u32; 4]| {
+        let mut k = f;
+        k.sort_unstable();
+        k
+    };
+    let mut faces: HashMap<[u32; 4], Vec<(u32, u8)>> = HashMap::new();
+    for e in (0..ne).filter(|&e| in_s[e]) {
+        for (f, lf) in HEX_FACES.iter().enumerate() {
+            faces.entry(key(lf.map(|i| w.mesh.elements[e][i]))).or_default().push((e as u32, f as u8));
+        }
+    }
+    // faces of flagged elements shared with an unflagged one: the sheet
+    let mut sheet: Vec<(u32, u8)> = Vec::new();
+    let mut other: HashMap<[u32; 4], ()> = HashMap::new();
+    for (e, el) in w.mesh.elements.iter().enumerate() {
+        if in_s[e] {
+            continue;
+        }
+        for lf in HEX_FACES.iter() {
+            let k = key(lf.map(|i| el[i]));
+            if faces.contains_key(&k) {
+                other.insert(k, ());
+            }
+        }
+    }
+    for (k, fs) in &faces {
+        if fs.len() == 1 && other.contains_key(k) {
+            sheet.push(fs[0]);
+        }
+    }
+    sheet.sort_unstable();
+    let mut on_sheet = vec![false; w.mesh.nodes.len()];
+    for &(e, f) in &sheet {
+        for i in HEX_FACES[f as usize] {
+            on_sheet[w.mesh.elements[e as usize][i] as usize] = true;
+        }
+    }
+    // groups: (element, node) slots of flagged elements at sheet nodes, joined
+    // across faces two flagged elements share
+    let mut slot: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut slots: Vec<(u32, u32)> = Vec::new();
+    for e in (0..ne).filter(|&e| in_s[e]) {
+        for &v in &w.mesh.elements[e] {
+            if on_sheet[v as usize] {
+                slot.insert((e as u32, v), slots.len());
+                slots.push((e as u32, v));
+            }
+        }
+    }
+    let mut parent: Vec<usize> = (0..slots.len()).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for (k, fs) in &faces {
+        if let [(e1, _), (e2, _)] = fs[..] {
+            for &v in k {
+                if let (Some(&a), Some(&b)) = (slot.get(&(e1, v)), slot.get(&(e2, v))) {
+                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                    if ra != rb {
+                        parent[ra] = rb;
+                    }
+                }
+            }
+        }
+    }
+    // one copy per group
+    let n0 = w.mesh.nodes.len();
+    let mut copy_of_root: HashMap<usize, u32> = HashMap::new();
+    let mut group_sum: Vec<([f64; 3], usize)> = Vec::new();
+    let mut copy_of_slot = vec![0u32; slots.len()];
+    for s in 0..slots.len() {
+        let r = find(&mut parent, s);
+        let (e, v) = slots[s];
+        let c = *copy_of_root.entry(r).or_insert_with(|| {
+            let id = (n0 + group_sum.len()) as u32;
+            group_sum.push(([0.0; 3], 0));
+            w.mesh.nodes.push(w.mesh.nodes[v as usize]);
+            w.role.push(if w.role[v as usize].on_boundary() { Role::Free } else { Role::Interior });
+            w.attach.push(u32::MAX);
+            w.curve_nb.push(Vec::new());
+            id
+        });
+        copy_of_slot[s] = c;
+        let cen = scale(w.mesh.element_corners(e as usize).iter().fold([0.0; 3], |a, x| add(a, *x)), 0.125);
+        let g = &mut group_sum[(c as usize) - n0];
+        g.0 = add(g.0, cen);
+        g.1 += 1;
+    }
+    // the new elements, on the original nodes of each sheet face (before the
+    // flagged elements take the copies)
+    let has_targets = w.target.len() == ne;
+    let mut negative = 0;
+    let mut new_elements = Vec::with_capacity(sheet.len());
+    for &(e, f) in &sheet {
+        let el = w.mesh.elements[e as usize];
+        let top = HEX_FACES[f as usize].map(|i| el[i]);
+        let bottom = top.map(|v| copy_of_slot[slot[&(e, v)]]);
+        new_elements.push(([bottom[0], bottom[1], bottom[2], bottom[3], top[0], top[1], top[2], top[3]], e, f));
+    }
+    for s in 0..slots.len() {
+        let (e, v) = slots[s];
+        for x in w.mesh.elements[e as usize].iter_mut() {
+            if *x == v {
+                *x = copy_of_slot[s];
+            }
+        }
+    }
+    for (c, (sum, k)) in group_sum.iter().enumerate() {
+        let id = n0 + c;
+        let x = w.mesh.nodes[id];
+        w.mesh.nodes[id] = add(x, scale(sub(scale(*sum, 1.0 / *k as f64), x), 0.25));
+    }
+    const UNIT: [[i32; 3]; 8] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+    let axis_of = |i: usize, j: usize| (0..3).find(|&a| UNIT[i][a] != UNIT[j][a]).unwrap_or(0);
+    for (el, e, f) in &new_elements {
+        w.mesh.elements.push(*el);
+        if has_targets {
+            let fl = HEX_FACES[*f as usize];
+            let t = w.target[*e as usize];
+            let (au, av) = (axis_of(fl[0], fl[1]), axis_of(fl[0], fl[3]));
+            w.target.push([t[au], t[av], 0.5 * t[3 - au - av]]);
+        }
+        if hex_volume(&el.map(|i| w.mesh.nodes[i as usize])) < 0.0 {
+            negative += 1;
+        }
+    }
+    w.rebuild();
+    (group_sum.len(), new_elements.len(), negative)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hex::{build_voxel_hex_mesh, Affine, HexOptions};
+    use crate::mesh::TriMesh;
+
+    /// A 6 x 4 x 3 box of unit voxels' faces, turned so that none of its edges
+    /// runs along a lattice axis.
+    fn turned_box() -> TriMesh {
+        let m = crate::mesh::tests::voxels([6, 4, 3], |_, _, _| true);
+        let (a, b) = (25f64.to_radians(), 15f64.to_radians());
+        let v = m
+            .vertices
+            .iter()
+            .map(|p| {
+                // about z by a, then about x by b
+                let q = [p[0] * a.cos() - p[1] * a.sin(), p[0] * a.sin() + p[1] * a.cos(), p[2]];
+                [q[0], q[1] * b.cos() - q[2] * b.sin(), q[1] * b.sin() + q[2] * b.cos()]
+            })
+            .collect();
+        TriMesh { vertices: v, triangles: m.triangles }
+    }
+
+    #[test]
+    fn a_turned_box_keeps_its_edges_and_corners_with_the_sheets() {
+        let mesh = turned_box();
+        let one = |sheets: bool| HexOptions { voxel_resolution: 12, voxel_refinements: 0, feature_sheets: sheets, ..Default::default() };
+        let id = Affine::similarity(1.0, [0.0; 3]);
+        let plain = build_voxel_hex_mesh(&mesh, &id, 0, &one(false), &mut crate::error::NoProgress).unwrap();
+        let r = build_voxel_hex_mesh(&mesh, &id, 0, &one(true), &mut crate::error::NoProgress).unwrap();
+        let st = r.stages.iter().find(|s| s.stage == "feature sheets").expect("a feature-sheets stage");
+        let d = &st.details;
+        assert_eq!(d["patches"], 6, "{d}");
+        assert_eq!(d["sheets"], 6, "{d}");
+        assert_eq!(d["kept"], true, "{d}");
+        assert_eq!(d["corner_nodes"], 8, "{d}");
+        assert!(d["curve_nodes"].as_u64().unwrap() > 12, "{d}");
+        assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
+        assert!(r.quality.min > 0.2, "{:?}", r.quality);
+        // the box's corners are nodes of the result
+        let corners = [[0.0, 0.0, 0.0], [6.0, 0.0, 0.0], [0.0, 4.0, 0.0], [6.0, 4.0, 3.0]];
+        let turned = turned_box();
+        for c in corners {
+            let k = crate::mesh::tests::voxels([6, 4, 3], |_, _, _| true).vertices.iter().position(|p| *p == c).unwrap();
+            let x = turned.vertices[k];
+            let near = r.mesh.nodes.iter().map(|p| norm(sub(*p, x))).fold(f64::INFINITY, f64::min);
+            assert!(near < 1e-9, "corner {c:?}: nearest node {near}");
+        }
+        // closer to the input than without the sheets, by more than a third
+        assert!(r.hausdorff_relative < 0.67 * plain.hausdorff_relative, "{} vs {}", r.hausdorff_relative, plain.hausdorff_relative);
+        let v = mesh.signed_volume();
+        assert!((r.volume - v).abs() < 0.01 * v, "{} vs {v}", r.volume);
+    }
+
+    #[test]
+    fn a_sheet_under_half_a_box_keeps_the_mesh_conforming() {
+        // a 2 x 1 x 1 block of unit hexes, the first flagged: one sheet face (the
+        // shared face), its four nodes copied; the new element sits between
+        let mesh = super::super::HexMesh {
+            nodes: (0..12).map(|i| [(i % 3) as f64, ((i / 3) % 2) as f64, (i / 6) as f64]).collect(),
+            elements: vec![[0, 1, 4, 3, 6, 7, 10, 9], [1, 2, 5, 4, 7, 8, 11, 10]],
+        };
+        let mut w = Work {
+            mesh: mesh.clone(),
+            role: vec![Role::Free; 12],
+            attach: vec![u32::MAX; 12],
+            curve_nb: vec![Vec::new(); 12],
+            bgraph: Default::default(),
+            nbr: Default::default(),
+            n2e: Default::default(),
+            target: vec![[1.0; 3]; 2],
+        };
+        w.rebuild();
+        let (nodes, elements, negative) = insert_sheet(&mut w, &[true, false]);
+        assert_eq!((nodes, elements, negative), (4, 1, 0));
+        assert_eq!(w.mesh.elements.len(), 3);
+        let bq = boundary_quads(&w.mesh).unwrap();
+        // 10 boundary faces of the block, plus the new element's 4 sides
+        assert_eq!(bq.len(), 14);
+        // the flagged element took the copies, the other kept the originals, and
+        // every element is positive (the copies moved a quarter of the way into
+        // the flagged element)
+        assert!(w.mesh.elements[0].iter().filter(|&&v| v >= 12).count() == 4 && w.mesh.elements[1].iter().all(|&v| v < 12));
+        assert!((0..3).all(|e| hex_volume(&w.mesh.element_corners(e)) > 0.0));
+        assert_eq!(w.role[12..], [Role::Free; 4]);
+    }
+}
