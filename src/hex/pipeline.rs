@@ -192,13 +192,13 @@ pub struct HexOptions {
     /// curve (or the feature corner) between their patches and held there
     /// ([`super::sheets`]); undone when the smoothing that follows leaves an
     /// inverted element. The elements along a curve share its dihedral angle two
-    /// by two, so the fallback meshes a lattice with the sheets and, when that
-    /// mesh misses the minimum or mean goal, without them too, and keeps the
-    /// better (docs/hex.md "Feature sheets"). Default true: at 24 voxels
-    /// cgal_joint 1.92 -> 0.30 % and mambo_B0 1.29 -> 0.21 %, both meeting every
-    /// goal (the main job needed 48 and 39 voxels); hexgen_rod at 28 voxels 1.27
-    /// -> 0.67 % but with a minimum of 0.254, so the plain mesh is kept there
-    /// (BENCHMARKS.md "Feature sheets").
+    /// by two and six meet at a corner of three faces, so when the mesh misses the
+    /// minimum or mean goal the fallback meshes the lattice again with no node held
+    /// at the corners, then without the sheets, and keeps the best (docs/hex.md
+    /// "Feature sheets"). Default true: at 24 voxels cgal_joint 1.92 -> 0.30 %
+    /// and mambo_B0 1.46 -> 0.21 %, both meeting every goal (the main job needed
+    /// 48 and 39 voxels); hexgen_rod at 36 voxels, corners not held, 1.10 ->
+    /// 0.56 % with every goal met (BENCHMARKS.md "Feature sheets").
     pub feature_sheets: bool,
 }
 
@@ -454,6 +454,9 @@ pub(crate) struct Level {
     pub role: Vec<Role>,
     pub curve_nb: Vec<Vec<u32>>,
     pub bquads: Vec<[u32; 4]>,
+    /// With the feature sheets, hold nodes at the feature corners (false: the
+    /// corners' nodes go onto one of their curves).
+    pub sheet_corners: bool,
 }
 
 /// Build the all-hex mesh of `input` (see the module docs and docs/hex.md).
@@ -612,7 +615,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         };
         let pos = work.mesh.nodes;
         let attach = work.attach;
-        let cur = Level { h, pos, attach, role, curve_nb, bquads };
+        let cur = Level { h, pos, attach, role, curve_nb, bquads, sheet_corners: true };
         let flipped = flipped_quads(&sw, &cur.pos, &cur.bquads);
         let inverted = summary(&HexMesh { nodes: cur.pos.clone(), elements: cur.h.mesh.elements.clone() }).inverted;
         let rep = LevelReport {
@@ -873,7 +876,7 @@ pub(crate) fn finish(
         let before = summary(&work.mesh);
         let saved = work.clone();
         let reach = SHEET_REACH * mean_boundary_edge(&work);
-        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach) {
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, lv.sheet_corners) {
             Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
             Err(e) => serde_json::json!({ "error": e.to_string() }),
         };

@@ -795,7 +795,7 @@ fn mesh_lattice(
         feature_corners: sw.features.corners.len(),
         ..Default::default()
     };
-    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads };
+    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads, sheet_corners: true };
     let mut details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats, "feature_nodes_held": held });
     if !refined.is_null() {
         details["local_refinement"] = refined;
@@ -804,28 +804,54 @@ fn mesh_lattice(
         // the lattice was repaired for a porous thin wall (topology_lattice)
         details["voxels_added_for_thin_walls"] = serde_json::json!({ "voxels": added, "min_solid_fraction": tau });
     }
-    // with the feature sheets first; when that mesh misses a scaled-Jacobian goal
-    // (the elements along the curves share their dihedral angles two by two), the
-    // lattice without them too, and the better kept (HexOptions::feature_sheets)
     let sheets = opts.feature_sheets && !sw.features.curves.is_empty() && held == 0;
     let mut r = if sheets {
+        // with the feature sheets first; when that mesh misses a scaled-Jacobian
+        // goal (the elements along the curves share their dihedral angles two by
+        // two, six meet at a corner of three faces), with the sheets but no node
+        // held at the feature corners, and when that misses one too, the lattice
+        // without the sheets as well; the best kept (HexOptions::feature_sheets)
+        let sheets_kept = |r: &HexResult| r.stages.iter().any(|s| s.stage == "feature sheets" && s.details["kept"] == true);
+        let misses_quality = |r: &HexResult| r.quality.inverted > 0 || r.quality.min < opts.goals.min_scaled_jacobian || r.quality.mean < opts.goals.mean_scaled_jacobian;
+        let figures = |r: &HexResult| {
+            let mut f = start_figures(r);
+            f.as_object_mut().map(|o| o.remove("start"));
+            f
+        };
         let with = finish(lv.clone(), targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
-        let kept = with.stages.iter().any(|s| s.stage == "feature sheets" && s.details["kept"] == true);
-        let q = &with.quality;
-        if kept && (q.inverted > 0 || q.min < opts.goals.min_scaled_jacobian || q.mean < opts.goals.mean_scaled_jacobian) {
-            let plain_opts = HexOptions { feature_sheets: false, ..opts.clone() };
-            let without = finish(lv, targets, smap, levels, details, fr, &plain_opts, t_all, progress)?;
-            // better by the goals' ranking, and not with a minimum below both the
-            // goal and the plain mesh's (hexgen_joint at 24 voxels: 4.42 % with a
-            // minimum of 0.000 against 5.32 % with 0.245, both far from every goal)
-            let keep_with = opts.goals.beats(&with, Some(&without)) && (with.quality.min >= opts.goals.min_scaled_jacobian || with.quality.min >= without.quality.min);
-            let figures = |r: &HexResult| {
-                let mut f = start_figures(r);
-                f.as_object_mut().map(|o| o.remove("start"));
-                f
+        let kept = sheets_kept(&with);
+        if kept && misses_quality(&with) {
+            let mut note = serde_json::json!({ "compared": true, "with": figures(&with) });
+            let curves = finish(Level { sheet_corners: false, ..lv.clone() }, targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
+            let mut best = with;
+            let mut chosen = "with";
+            if sheets_kept(&curves) {
+                note["curves_only"] = figures(&curves);
+                if opts.goals.beats(&curves, Some(&best)) {
+                    best = curves;
+                    chosen = "curves_only";
+                }
+            }
+            let r = if misses_quality(&best) {
+                let plain_opts = HexOptions { feature_sheets: false, ..opts.clone() };
+                let without = finish(lv, targets, smap, levels, details, fr, &plain_opts, t_all, progress)?;
+                note["without"] = figures(&without);
+                // better by the goals' ranking, and not with a minimum below both
+                // the goal and the plain mesh's (hexgen_joint at 24 voxels: 4.42 %
+                // with a minimum of 0.000 against 5.32 % with 0.245, both far from
+                // every goal)
+                if opts.goals.beats(&best, Some(&without)) && (best.quality.min >= opts.goals.min_scaled_jacobian || best.quality.min >= without.quality.min) {
+                    best
+                } else {
+                    chosen = "without";
+                    without
+                }
+            } else {
+                best
             };
-            let note = serde_json::json!({ "compared": true, "kept": keep_with, "with": figures(&with), "without": figures(&without) });
-            let mut r = if keep_with { with } else { without };
+            let mut r = r;
+            note["kept"] = serde_json::json!(chosen != "without");
+            note["chosen"] = serde_json::json!(chosen);
             r.stages[0].details["feature_sheets"] = note;
             r
         } else {
