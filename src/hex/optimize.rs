@@ -957,13 +957,7 @@ pub fn capture_features(w: &mut Work, sw: &Surface, reach: f64, rounds: usize, f
         })
         .collect();
     // the two faces along each input edge
-    let mut edge_tris: std::collections::HashMap<(u32, u32), Vec<u32>> = std::collections::HashMap::new();
-    for (t, tri) in sw.mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            edge_tris.entry((a.min(b), a.max(b))).or_default().push(t as u32);
-        }
-    }
+    let edge_tris = super::surface::edge_triangles(&sw.mesh);
     // the curves' segments in runs of CAPTURE_CHUNK with their boxes: a node looks
     // only at the runs whose box is within reach (the nearest curve within reach is
     // among them)

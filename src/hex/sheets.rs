@@ -243,13 +243,7 @@ pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, corners: bool) -> 
     }
     // ---- the path nodes onto the curves and corners ----
     // curves by the pair of patches on their two sides
-    let mut edge_tris: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-    for (t, tri) in sw.mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            edge_tris.entry((a.min(b), a.max(b))).or_default().push(t as u32);
-        }
-    }
+    let edge_tris = super::surface::edge_triangles(&sw.mesh);
     let mut pair_curves: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
     for (c, cv) in sw.features.curves.iter().enumerate() {
         let mut pairs = std::collections::BTreeSet::new();

@@ -23,10 +23,18 @@ pub struct Features {
     pub corners: Vec<u32>,
 }
 
-/// Detect sharp edges (dihedral angle between the triangle normals above `angle_deg`)
-/// on `mesh` and chain them into curves split at corners. A vertex is a corner when
-/// its number of sharp edges is not 2, or when its two sharp edges turn by more than
-/// `turn_deg`.
+/// The triangles on each edge of `mesh` (key: the edge's vertices, smaller first).
+pub fn edge_triangles(mesh: &TriMesh) -> HashMap<(u32, u32), Vec<u32>> {
+    let mut m: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(mesh.triangles.len() * 2);
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            m.entry((a.min(b), a.max(b))).or_default().push(t as u32);
+        }
+    }
+    m
+}
+
 /// Unit normal of every triangle (zero for a degenerate one).
 fn unit_normals(mesh: &TriMesh) -> Vec<[f64; 3]> {
     mesh        .triangles
@@ -43,6 +51,10 @@ fn unit_normals(mesh: &TriMesh) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Detect sharp edges (dihedral angle between the triangle normals above `angle_deg`)
+/// on `mesh` and chain them into curves split at corners. A vertex is a corner when
+/// its number of sharp edges is not 2, or when its two sharp edges turn by more than
+/// `turn_deg`.
 pub fn detect_features(mesh: &TriMesh, angle_deg: f64, turn_deg: f64) -> Features {
     let normals = unit_normals(mesh);
     let mut edge_tris: HashMap<[u32; 2], Vec<u32>> = HashMap::new();
@@ -249,18 +261,9 @@ impl Surface {
     /// Closest point among triangles whose normal makes `n . normal >= min_cos` with the
     /// unit vector `n`; falls back to the unrestricted closest point when none qualifies.
     pub fn closest_facing(&self, p: [f64; 3], n: [f64; 3], min_cos: f64) -> ([f64; 3], u32, f64) {
-        let r = self.bvh.nearest(p, |t| {
-            if dot(self.normals[t as usize], n) < min_cos {
-                return f64::INFINITY;
-            }
-            let [a, b, c] = self.tri(t);
-            dist2(p, closest_point_on_triangle(p, a, b, c).0)
-        });
+        let r = self.bvh.nearest(p, |t| if dot(self.normals[t as usize], n) < min_cos { f64::INFINITY } else { self.dist2_to_triangle(t, p) });
         match r {
-            Some((t, d2)) if d2.is_finite() => {
-                let [a, b, c] = self.tri(t);
-                (closest_point_on_triangle(p, a, b, c).0, t, d2.sqrt())
-            }
+            Some((t, d2)) if d2.is_finite() => (self.closest_on_triangle(t, p), t, d2.sqrt()),
             _ => self.closest(p),
         }
     }
