@@ -454,9 +454,10 @@ pub(crate) struct Level {
     pub role: Vec<Role>,
     pub curve_nb: Vec<Vec<u32>>,
     pub bquads: Vec<[u32; 4]>,
-    /// With the feature sheets, hold nodes at the feature corners (false: the
-    /// corners' nodes go onto one of their curves).
-    pub sheet_corners: bool,
+    /// With the feature sheets, the feature corners (indices into the surface's
+    /// feature corners) at which no node is held: the nodes there go onto one of
+    /// their curves. Empty: a node at every corner the sheets reach.
+    pub released_corners: Vec<u32>,
 }
 
 /// Build the all-hex mesh of `input` (see the module docs and docs/hex.md).
@@ -615,7 +616,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
         };
         let pos = work.mesh.nodes;
         let attach = work.attach;
-        let cur = Level { h, pos, attach, role, curve_nb, bquads, sheet_corners: true };
+        let cur = Level { h, pos, attach, role, curve_nb, bquads, released_corners: Vec::new() };
         let flipped = flipped_quads(&sw, &cur.pos, &cur.bquads);
         let inverted = summary(&HexMesh { nodes: cur.pos.clone(), elements: cur.h.mesh.elements.clone() }).inverted;
         let rep = LevelReport {
@@ -868,34 +869,34 @@ pub(crate) fn finish(
 
     // ---- feature sheets: a sheet under each surface patch, the paths between
     // them onto the sharp curves (lattice meshes, whose nodes are not on curves
-    // yet); smoothed at once, undone when the smoothing leaves an inverted element ----
+    // yet); smoothed at once. Kept even when the smoothing leaves inverted
+    // elements (faces narrower than the voxels): the steps below untangle most of
+    // them, and the fallback compares the result with the mesh without the
+    // sheets (voxel::mesh_lattice) ----
     let mut smoothed = None;
     if opts.feature_sheets && opts.pillow && work.role.iter().all(|r| matches!(r, Role::Free | Role::Interior)) && !sw.features.curves.is_empty() {
         check_progress(progress, 0.58, "hex: feature sheets")?;
         let t0 = Instant::now();
         let before = summary(&work.mesh);
-        let saved = work.clone();
+        let elements_before = work.mesh.elements.len();
         let reach = SHEET_REACH * mean_boundary_edge(&work);
-        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, lv.sheet_corners) {
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners) {
             Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
             Err(e) => serde_json::json!({ "error": e.to_string() }),
         };
-        let inserted = work.mesh.elements.len() > saved.mesh.elements.len();
+        let inserted = work.mesh.elements.len() > elements_before;
+        if let Some(d) = details.as_object_mut() {
+            d.insert("kept".into(), serde_json::json!(inserted));
+        }
         if inserted {
             let before_smooth = summary(&work.mesh);
             let t1 = Instant::now();
             let st: MoveStats = optimize::untangle(&mut work, sw, opts.smooth_iterations, |_| true);
             let after = summary(&work.mesh);
-            let kept = after.inverted == 0;
             if let Some(d) = details.as_object_mut() {
                 d.insert("inverted_after_smoothing".into(), serde_json::json!(after.inverted));
-                d.insert("kept".into(), serde_json::json!(kept));
             }
-            if kept {
-                smoothed = Some(stage_report("smoothing", before_smooth, &work.mesh, t1, serde_json::to_value(st).unwrap_or_default()));
-            } else {
-                work = saved;
-            }
+            smoothed = Some(stage_report("smoothing", before_smooth, &work.mesh, t1, serde_json::to_value(st).unwrap_or_default()));
         }
         stages.push(stage_report("feature sheets", before, &work.mesh, t0, details));
     }

@@ -795,7 +795,7 @@ fn mesh_lattice(
         feature_corners: sw.features.corners.len(),
         ..Default::default()
     };
-    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads, sheet_corners: true };
+    let lv = Level { h, pos: work.mesh.nodes, attach: work.attach, role: work.role, curve_nb: work.curve_nb, bquads, released_corners: Vec::new() };
     let mut details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats, "feature_nodes_held": held });
     if !refined.is_null() {
         details["local_refinement"] = refined;
@@ -808,8 +808,9 @@ fn mesh_lattice(
     let mut r = if sheets {
         // with the feature sheets first; when that mesh misses a scaled-Jacobian
         // goal (the elements along the curves share their dihedral angles two by
-        // two, six meet at a corner of three faces), with the sheets but no node
-        // held at the feature corners, and when that misses one too, the lattice
+        // two, six meet at a corner of three faces), again with no node held at
+        // the feature corners whose elements missed the minimum (at every corner
+        // when the miss is elsewhere), and when that misses one too, the lattice
         // without the sheets as well; the best kept (HexOptions::feature_sheets)
         let sheets_kept = |r: &HexResult| r.stages.iter().any(|s| s.stage == "feature sheets" && s.details["kept"] == true);
         let misses_quality = |r: &HexResult| r.quality.inverted > 0 || r.quality.min < opts.goals.min_scaled_jacobian || r.quality.mean < opts.goals.mean_scaled_jacobian;
@@ -822,14 +823,20 @@ fn mesh_lattice(
         let kept = sheets_kept(&with);
         if kept && misses_quality(&with) {
             let mut note = serde_json::json!({ "compared": true, "with": figures(&with) });
-            let curves = finish(Level { sheet_corners: false, ..lv.clone() }, targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
+            let all: Vec<u32> = (0..sw.features.corners.len() as u32).collect();
+            let release = match corners_below(&with, opts.goals.min_scaled_jacobian) {
+                bad if bad.is_empty() => all.clone(),
+                bad => bad,
+            };
+            let curves = finish(Level { released_corners: release.clone(), ..lv.clone() }, targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
+            note["corners_released"] = serde_json::json!(release.len());
             let mut best = with;
             let mut chosen = "with";
             if sheets_kept(&curves) {
-                note["curves_only"] = figures(&curves);
+                note["released"] = figures(&curves);
                 if opts.goals.beats(&curves, Some(&best)) {
                     best = curves;
-                    chosen = "curves_only";
+                    chosen = "released";
                 }
             }
             let r = if misses_quality(&best) {
@@ -864,6 +871,27 @@ fn mesh_lattice(
     };
     r.domain = format!("voxel {res}");
     Ok(r)
+}
+
+/// The feature corners (indices into the surface's feature corners) held by the
+/// feature sheets of `r` at a node of an element whose scaled Jacobian is below
+/// `min` (none when the sheets were undone or the mapped mesh was returned).
+fn corners_below(r: &HexResult, min: f64) -> Vec<u32> {
+    let Some(st) = r.stages.iter().find(|s| s.stage == "feature sheets" && s.details["kept"] == true) else { return Vec::new() };
+    if r.returned != "optimised" {
+        return Vec::new();
+    }
+    let held: Vec<[u32; 2]> = serde_json::from_value(st.details["corners_held"].clone()).unwrap_or_default();
+    let mut node_min = vec![f64::INFINITY; r.mesh.nodes.len()];
+    for (el, &q) in r.mesh.elements.iter().zip(&r.scaled_jacobian) {
+        for &v in el {
+            node_min[v as usize] = node_min[v as usize].min(q);
+        }
+    }
+    let mut bad: Vec<u32> = held.iter().filter(|h| node_min.get(h[0] as usize).is_some_and(|&q| q < min)).map(|h| h[1]).collect();
+    bad.sort_unstable();
+    bad.dedup();
+    bad
 }
 
 #[cfg(test)]
