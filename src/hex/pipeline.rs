@@ -190,15 +190,17 @@ pub struct HexOptions {
     /// sharp curves), a sheet of elements inserted under each patch's quads within
     /// one ring of another label, and the nodes where labels meet put on the sharp
     /// curve (or the feature corner) between their patches and held there
-    /// ([`super::sheets`]); undone when the smoothing that follows leaves an
-    /// inverted element. The elements along a curve share its dihedral angle two
-    /// by two and six meet at a corner of three faces, so when the mesh misses the
-    /// minimum or mean goal the fallback meshes the lattice again with no node held
-    /// at the corners, then without the sheets, and keeps the best (docs/hex.md
-    /// "Feature sheets"). Default true: at 24 voxels cgal_joint 1.92 -> 0.30 %
-    /// and mambo_B0 1.46 -> 0.21 %, both meeting every goal (the main job needed
-    /// 48 and 39 voxels); hexgen_rod at 36 voxels, corners not held, 1.10 ->
-    /// 0.56 % with every goal met (BENCHMARKS.md "Feature sheets").
+    /// ([`super::sheets`]); kept even when the smoothing that follows leaves
+    /// inverted elements (a face narrower than the voxels), which the later
+    /// steps untangle. The elements along a curve share its dihedral angle two
+    /// by two and six meet at a corner of three faces, so when the mesh misses
+    /// the minimum goal alone at elements of corner nodes the fallback meshes the
+    /// lattice again with no node held at those corners, when it misses a goal
+    /// still, without the sheets, and keeps the best (docs/hex.md "Feature
+    /// sheets"). Default true: at 24 voxels cgal_joint 1.92 -> 0.30 % and
+    /// mambo_B0 1.46 -> 0.21 %, both meeting every goal (the main job needed 48
+    /// and 39 voxels); hexgen_hepta at 28 voxels 1.41 -> 0.83 %, every goal met
+    /// (BENCHMARKS.md "Feature sheets", "Feature sheets through the inversions").
     pub feature_sheets: bool,
 }
 
