@@ -812,7 +812,7 @@ fn mesh_lattice(
         // elements of a node held at a feature corner, again with no node held at
         // those corners; when the best so far misses a goal, the lattice without
         // the sheets as well; the best kept (HexOptions::feature_sheets)
-        let sheets_kept = |r: &HexResult| r.stages.iter().any(|s| s.stage == "feature sheets" && s.details["kept"] == true);
+        let sheets_kept = |r: &HexResult| kept_sheets(r).is_some();
         let misses_quality = |r: &HexResult| r.quality.inverted > 0 || r.quality.min < opts.goals.min_scaled_jacobian || r.quality.mean < opts.goals.mean_scaled_jacobian;
         let figures = |r: &HexResult| {
             let mut f = start_figures(r);
@@ -827,8 +827,8 @@ fn mesh_lattice(
             let mut best = with;
             let mut chosen = "with";
             if !release.is_empty() && best.quality.inverted == 0 && best.quality.mean >= opts.goals.mean_scaled_jacobian {
-                let released = finish(Level { released_corners: release.clone(), ..lv.clone() }, targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
                 note["corners_released"] = serde_json::json!(release.len());
+                let released = finish(Level { released_corners: release, ..lv.clone() }, targets.clone(), smap.clone(), levels.clone(), details.clone(), fr, opts, t_all, progress)?;
                 if sheets_kept(&released) {
                     note["released"] = figures(&released);
                     if opts.goals.beats(&released, Some(&best)) {
@@ -871,11 +871,16 @@ fn mesh_lattice(
     Ok(r)
 }
 
+/// The "feature sheets" stage of `r` when it inserted the sheets.
+fn kept_sheets(r: &HexResult) -> Option<&super::pipeline::StageReport> {
+    r.stages.iter().find(|s| s.stage == "feature sheets" && s.details["kept"] == true)
+}
+
 /// The feature corners (indices into the surface's feature corners) held by the
 /// feature sheets of `r` at a node of an element whose scaled Jacobian is below
-/// `min` (none when the sheets were undone or the mapped mesh was returned).
+/// `min` (none when no sheet was inserted or the mapped mesh was returned).
 fn corners_below(r: &HexResult, min: f64) -> Vec<u32> {
-    let Some(st) = r.stages.iter().find(|s| s.stage == "feature sheets" && s.details["kept"] == true) else { return Vec::new() };
+    let Some(st) = kept_sheets(r) else { return Vec::new() };
     if r.returned != "optimised" {
         return Vec::new();
     }
