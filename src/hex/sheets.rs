@@ -704,6 +704,33 @@ mod tests {
     }
 
     #[test]
+    fn the_rod_at_33_voxels_releases_every_corner_when_the_concave_ones_leave_it_short() {
+        // hexgen_rod at 33 voxels, default options (the main job's lattice until
+        // the twenty-seventh session): the sheets' mesh misses the minimum at the
+        // 4 concave corners; with those released it is valid but 1.06 % away;
+        // with all 8 released 0.93 %, every goal met (BENCHMARKS.md "Releasing
+        // every corner when the corners at fault are not enough")
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
+        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
+        let genus = mesh.validate().unwrap().genus.unwrap();
+        let opts = HexOptions { voxel_resolution: 33, voxel_refinements: 0, ..Default::default() };
+        let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
+        let note = &r.stages[0].details["feature_sheets"];
+        assert_eq!((note["corners_released"].as_u64(), note["corners_released_all"].as_u64()), (Some(4), Some(8)), "{note}");
+        // the targeted release missed a goal (that is why every corner was tried)
+        let rel = &note["released"];
+        let missed = rel["inverted"].as_u64() != Some(0)
+            || rel["min_scaled_jacobian"].as_f64().unwrap() < opts.goals.min_scaled_jacobian
+            || rel["mean_scaled_jacobian"].as_f64().unwrap() < opts.goals.mean_scaled_jacobian
+            || rel["hausdorff_relative"].as_f64().unwrap() > opts.goals.hausdorff;
+        assert!(missed, "{note}");
+        assert_eq!(note["chosen"], "released_all", "{note}");
+        assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
+        let st = r.stages.iter().find(|s| s.stage == "feature sheets").unwrap();
+        assert_eq!((st.details["kept"].as_bool(), st.details["corner_nodes"].as_u64()), (Some(true), Some(0)), "{}", st.details);
+    }
+
+    #[test]
     fn the_sheets_of_hepta_are_kept_through_the_inversions_at_20_voxels() {
         // hexgen_hepta's 45-degree chamfers are narrower than a voxel at 20: the
         // two sheets of a chamfer meet and the smoothing leaves 13 elements
