@@ -4,7 +4,7 @@
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
 //! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
 //! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
-//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library).
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library; `HEX_MIN` / `HEX_MEAN` set the scaled-Jacobian goals).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -37,6 +37,13 @@ fn main() -> sddpm::Result<()> {
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
         if let Some(g) = std::env::var("HEX_HAUSDORFF").ok().and_then(|s| s.parse().ok()) {
             opts.goals.hausdorff = g;
+        }
+        // HEX_MIN=M / HEX_MEAN=M: the scaled-Jacobian goals (QualityGoals), 0.3 / 0.85 by default
+        if let Some(g) = std::env::var("HEX_MIN").ok().and_then(|s| s.parse().ok()) {
+            opts.goals.min_scaled_jacobian = g;
+        }
+        if let Some(g) = std::env::var("HEX_MEAN").ok().and_then(|s| s.parse().ok()) {
+            opts.goals.mean_scaled_jacobian = g;
         }
         let t = std::time::Instant::now();
         let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &sddpm::hex::Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut sddpm::error::NoProgress)?;

@@ -195,9 +195,10 @@ pub struct HexOptions {
     /// steps untangle. The elements along a curve share its dihedral angle two
     /// by two and six meet at a corner of three faces, so when the mesh misses
     /// the minimum goal alone at elements of corner nodes the fallback meshes the
-    /// lattice again with no node held at those corners, when it misses a goal
-    /// still, without the sheets, and keeps the best (docs/hex.md "Feature
-    /// sheets"). Default true: at 24 voxels cgal_joint 1.92 -> 0.30 % and
+    /// lattice again with no node held at those corners, when that misses a goal
+    /// (the distance too), with no node held at any corner, when the best misses
+    /// a scaled-Jacobian goal still, without the sheets, and keeps the best
+    /// (docs/hex.md "Feature sheets"). Default true: at 24 voxels cgal_joint 1.92 -> 0.30 % and
     /// mambo_B0 1.46 -> 0.21 %, both meeting every goal (the main job needed 48
     /// and 39 voxels); hexgen_hepta at 28 voxels 1.41 -> 0.83 %, every goal met
     /// (BENCHMARKS.md "Feature sheets", "Feature sheets through the inversions").
