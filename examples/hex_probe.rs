@@ -4,7 +4,7 @@
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
 //! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
 //! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
-//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library; `HEX_MIN` / `HEX_MEAN` set the scaled-Jacobian goals).
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library; `HEX_MIN` / `HEX_MEAN` set the scaled-Jacobian goals; `HEX_NARROW=DEG` the narrow corner faces' angle, 0 off).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -31,6 +31,10 @@ fn main() -> sddpm::Result<()> {
         // HEX_SHEETS=0: without the feature sheets (HexOptions::feature_sheets, on by default)
         if let Ok(v) = std::env::var("HEX_SHEETS") {
             opts.feature_sheets = v != "0";
+        }
+        // HEX_NARROW=DEG: narrow corner faces below DEG degrees (HexOptions::narrow_corner_faces, 70 by default; 0 off)
+        if let Some(d) = std::env::var("HEX_NARROW").ok().and_then(|s| s.parse().ok()) {
+            opts.narrow_corner_faces = d;
         }
         // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
         opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);

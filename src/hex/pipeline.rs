@@ -203,6 +203,14 @@ pub struct HexOptions {
     /// and 39 voxels); hexgen_hepta at 28 voxels 1.41 -> 0.83 %, every goal met
     /// (BENCHMARKS.md "Feature sheets", "Feature sheets through the inversions").
     pub feature_sheets: bool,
+    /// With the feature sheets: at a node held at a feature corner, a face whose
+    /// angle at the corner is below this many degrees keeps the lattice's quads
+    /// there instead of getting two of half its angle from its sheet (0: off).
+    /// Default 70: hexgen_rod's four concave corners (faces of 52-60 degrees)
+    /// are then held within the minimum goal (0.24-0.28 -> 0.37-0.40), and at 33
+    /// voxels it comes to 0.75 % with every corner held, where releasing them
+    /// gave 0.93 % (BENCHMARKS.md "One quad for a narrow face at a corner").
+    pub narrow_corner_faces: f64,
 }
 
 impl Default for HexOptions {
@@ -231,6 +239,7 @@ impl Default for HexOptions {
             pin_uncovered: 0.0,
             capture_features: true,
             feature_sheets: true,
+            narrow_corner_faces: 70.0,
             local_refinement: 0,
             voxel_fallback: true,
             voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,
@@ -883,7 +892,7 @@ pub(crate) fn finish(
         let before = summary(&work.mesh);
         let elements_before = work.mesh.elements.len();
         let reach = SHEET_REACH * mean_boundary_edge(&work);
-        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners) {
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners, opts.narrow_corner_faces) {
             Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
             Err(e) => serde_json::json!({ "error": e.to_string() }),
         };

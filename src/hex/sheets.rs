@@ -63,6 +63,9 @@ pub struct SheetReport {
     pub corners_held: Vec<[u32; 2]>,
     /// Feature corners the caller asked not to hold a node at.
     pub corners_released: usize,
+    /// Corners where a face narrower than the option's angle kept the lattice's
+    /// quads out of its sheet.
+    pub narrow_corners: usize,
     /// New elements with a negative signed volume right after the insertion (zero
     /// thickness counts as neither): the smoothing that follows untangles them.
     pub negative_volume: usize,
@@ -124,9 +127,11 @@ pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
 /// the working frame) a path node may be from its curve or corner to be put on it.
 /// No node is held at the feature corners listed in `released` (indices into
 /// `sw.features.corners`; the nodes there go onto one of the corner's curves).
+/// A face whose angle at a held corner is below `narrow_deg` degrees keeps the
+/// lattice's quads there, out of its sheet (0: none).
 /// Leaves `w` unchanged and returns an error when the mesh is not pillowed or
 /// the result would not be conforming.
-pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32]) -> Result<SheetReport> {
+pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32], narrow_deg: f64) -> Result<SheetReport> {
     let mut rep = SheetReport::default();
     let (tri_patch, np) = triangle_patches(sw);
     rep.patches = np;
@@ -229,6 +234,51 @@ pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32]) 
     for (k, q) in bq.iter().enumerate() {
         if ring[k] <= SHEET_BAND {
             el_label[q.element as usize] = label[k];
+        }
+    }
+    // ---- narrow faces at the corners: one quad, not two ----
+    // At the path node nearest each feature corner (three labels meet there; the
+    // node the corner goes onto below), the elements under the quads of a face
+    // whose angle at the corner is below `narrow_deg` stay out of that face's
+    // sheet: the face keeps the lattice's quad(s) at the corner, spanning its
+    // whole angle, where the sheet would give it exactly two of half the angle
+    // each (hexgen_rod's 52-60 degree faces at its four concave corners: elements
+    // at 0.24-0.28, below the minimum goal; 0.37-0.40 with them out)
+    if narrow_deg > 0.0 {
+        for (ci, &k) in sw.features.corners.iter().enumerate() {
+            if released.contains(&(ci as u32)) {
+                continue;
+            }
+            let cx = sw.mesh.vertices[k as usize];
+            let Some(v) = path
+                .iter()
+                .copied()
+                .filter(|&v| node_labels[v as usize].len() >= 3)
+                .map(|v| (v, norm(sub(w.mesh.nodes[v as usize], cx))))
+                .filter(|&(_, d)| d <= reach)
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|x| x.0)
+            else {
+                continue;
+            };
+            // each patch's angle at the corner: the sum of its triangles' angles there
+            let mut angle: HashMap<u32, f64> = HashMap::new();
+            for (t, tri) in sw.mesh.triangles.iter().enumerate() {
+                if let Some(i) = tri.iter().position(|&x| x == k) {
+                    let a = sub(sw.mesh.vertices[tri[(i + 1) % 3] as usize], cx);
+                    let b = sub(sw.mesh.vertices[tri[(i + 2) % 3] as usize], cx);
+                    let c = (dot(a, b) / (norm(a) * norm(b))).clamp(-1.0, 1.0);
+                    *angle.entry(tri_patch[t]).or_default() += c.acos().to_degrees();
+                }
+            }
+            let mut out = false;
+            for (qi, q) in bq.iter().enumerate().filter(|(_, q)| q.nodes.contains(&v)) {
+                if angle.get(&label[qi]).is_some_and(|&a| a < narrow_deg) {
+                    el_label[q.element as usize] = u32::MAX;
+                    out = true;
+                }
+            }
+            rep.narrow_corners += out as usize;
         }
     }
     let mut bordering: Vec<u32> = path.iter().flat_map(|&v| node_labels[v as usize].iter().copied()).collect();
@@ -673,33 +723,36 @@ mod tests {
     }
 
     #[test]
-    fn the_rod_meets_every_goal_at_36_voxels_with_its_convex_corners_held() {
-        // hexgen_rod at 36 voxels: plain 1.10 % away; with the sheets 0.46 % but
-        // the elements at the four concave corners of the small end's step at
-        // 0.24; with no node held at those four (the four convex ones still held)
-        // every goal is met (BENCHMARKS.md "Feature sheets"), where the fallback
-        // without the sheets needed 48 voxels (5,723 elements)
+    fn the_rod_meets_every_goal_at_36_voxels_with_every_corner_held() {
+        // hexgen_rod at 36 voxels with the coverage step: plain 1.10 % away; with
+        // the sheets, its four concave corners (where the small end's step meets
+        // the shoulder) have a face of 52-60 degrees, which the sheets split into
+        // two quads: elements at 0.24, and the corners had to be released (0.485 %).
+        // With those faces' lattice quads kept out of their sheets every corner is
+        // held within the minimum goal, and the first mesh meets every goal
+        // (0.47 %; HexGen's rod: 0.48 % at 1,280 elements; BENCHMARKS.md "One quad
+        // for a narrow face at a corner"), where the fallback without the sheets
+        // needed 48 voxels (5,723 elements)
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
         let opts = HexOptions { voxel_resolution: 36, voxel_refinements: 0, pin_uncovered: 0.6, ..Default::default() };
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
         let note = &r.stages[0].details["feature_sheets"];
-        assert_eq!(note["chosen"], "released", "{note}");
-        assert!(note["with"]["min_scaled_jacobian"].as_f64().unwrap() < opts.goals.min_scaled_jacobian, "{note}");
-        assert!(note["with"]["hausdorff_relative"].as_f64().unwrap() < note["released"]["hausdorff_relative"].as_f64().unwrap(), "{note}");
+        assert_eq!((&note["compared"], &note["kept"]), (&serde_json::json!(false), &serde_json::json!(true)), "{note}");
         assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
+        // within a tenth of HexGen's 0.48 % (one lattice's trajectory carries
+        // about a tenth of noise, "Lattice placement at HexGen's counts")
+        assert!(r.hausdorff_relative < 0.0053, "{}", r.hausdorff_relative);
         assert!(r.quality.elements < 5_723, "{}", r.quality.elements);
         let st = r.stages.iter().find(|s| s.stage == "feature sheets").unwrap();
         let d = &st.details;
-        assert_eq!(d["kept"], true, "{d}");
-        // the rod has 8 feature corners: the 4 concave ones released, the 4
-        // convex ones held, each at a node of the mesh returned
-        assert_eq!((note["corners_released"].as_u64(), d["corners_released"].as_u64(), d["corner_nodes"].as_u64()), (Some(4), Some(4), Some(4)), "{note} {d}");
+        // the rod has 8 feature corners, all held; 4 with a narrow face
+        assert_eq!((d["kept"].as_bool(), d["corner_nodes"].as_u64(), d["narrow_corners"].as_u64()), (Some(true), Some(8), Some(4)), "{d}");
         let held: Vec<[u32; 2]> = serde_json::from_value(d["corners_held"].clone()).unwrap();
         for [v, _] in held {
-            let x = r.mesh.nodes[v as usize];
-            assert!(x[0] > 18.0, "a held corner node at {x:?}: the convex corners are at x = 18.6");
+            let worst = r.mesh.elements.iter().zip(&r.scaled_jacobian).filter(|(el, _)| el.contains(&v)).map(|(_, &q)| q).fold(f64::INFINITY, f64::min);
+            assert!(worst >= opts.goals.min_scaled_jacobian, "corner node {v} at {:?}: an element at {worst}", r.mesh.nodes[v as usize]);
         }
     }
 
@@ -713,7 +766,10 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
-        let opts = HexOptions { voxel_resolution: 33, voxel_refinements: 0, ..Default::default() };
+        // (the narrow corner faces off: with them the concave corners are held
+        // within the minimum goal and nothing is released, "One quad for a narrow
+        // face at a corner")
+        let opts = HexOptions { voxel_resolution: 33, voxel_refinements: 0, narrow_corner_faces: 0.0, ..Default::default() };
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
         let note = &r.stages[0].details["feature_sheets"];
         assert_eq!((note["corners_released"].as_u64(), note["corners_released_all"].as_u64()), (Some(4), Some(8)), "{note}");
