@@ -722,6 +722,14 @@ mod tests {
         assert!((r.volume - v).abs() < 0.01 * v, "{} vs {v}", r.volume);
     }
 
+    /// The voxel fallback's mesh of hexgen_rod with these options.
+    fn rod_lattice(opts: &HexOptions) -> crate::hex::HexResult {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
+        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
+        let genus = mesh.validate().unwrap().genus.unwrap();
+        build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, opts, &mut crate::error::NoProgress).unwrap()
+    }
+
     #[test]
     fn the_rod_meets_every_goal_at_36_voxels_with_every_corner_held() {
         // hexgen_rod at 36 voxels with the coverage step: plain 1.10 % away; with
@@ -733,11 +741,8 @@ mod tests {
         // (0.47 %; HexGen's rod: 0.48 % at 1,280 elements; BENCHMARKS.md "One quad
         // for a narrow face at a corner"), where the fallback without the sheets
         // needed 48 voxels (5,723 elements)
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
-        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
-        let genus = mesh.validate().unwrap().genus.unwrap();
         let opts = HexOptions { voxel_resolution: 36, voxel_refinements: 0, pin_uncovered: 0.6, ..Default::default() };
-        let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
+        let r = rod_lattice(&opts);
         let note = &r.stages[0].details["feature_sheets"];
         assert_eq!((&note["compared"], &note["kept"]), (&serde_json::json!(false), &serde_json::json!(true)), "{note}");
         assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
@@ -763,14 +768,11 @@ mod tests {
         // 4 concave corners; with those released it is valid but 1.06 % away;
         // with all 8 released 0.93 %, every goal met (BENCHMARKS.md "Releasing
         // every corner when the corners at fault are not enough")
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
-        let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
-        let genus = mesh.validate().unwrap().genus.unwrap();
         // (the narrow corner faces off: with them the concave corners are held
         // within the minimum goal and nothing is released, "One quad for a narrow
         // face at a corner")
         let opts = HexOptions { voxel_resolution: 33, voxel_refinements: 0, narrow_corner_faces: 0.0, ..Default::default() };
-        let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
+        let r = rod_lattice(&opts);
         let note = &r.stages[0].details["feature_sheets"];
         assert_eq!((note["corners_released"].as_u64(), note["corners_released_all"].as_u64()), (Some(4), Some(8)), "{note}");
         // the targeted release missed a goal (that is why every corner was tried)
