@@ -278,6 +278,12 @@ impl QualityGoals {
             .count()
     }
 
+    /// Does `r` miss a scaled-Jacobian goal (an inverted element, the minimum or
+    /// the mean), whatever its distance?
+    pub fn misses_scaled_jacobian(&self, r: &HexResult) -> bool {
+        r.quality.inverted > 0 || r.quality.min < self.min_scaled_jacobian || r.quality.mean < self.mean_scaled_jacobian
+    }
+
     /// How far a mesh with these figures falls short of the goals: the sum over the
     /// three of the miss relative to the goal (0 for a goal met): (goal - min) /
     /// goal, (goal - mean) / goal, (distance - goal) / goal. A mesh with inverted

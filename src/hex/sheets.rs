@@ -71,6 +71,18 @@ pub struct SheetReport {
     pub negative_volume: usize,
 }
 
+/// The path node nearest `x` within `reach` with at least `min_labels` labels
+/// that `keep` accepts (the first of equally near ones).
+fn nearest_path_node(path: &[u32], node_labels: &[Vec<u32>], nodes: &[[f64; 3]], x: [f64; 3], reach: f64, min_labels: usize, keep: impl Fn(u32) -> bool) -> Option<u32> {
+    path.iter()
+        .copied()
+        .filter(|&v| node_labels[v as usize].len() >= min_labels && keep(v))
+        .map(|v| (v, norm(sub(nodes[v as usize], x))))
+        .filter(|&(_, d)| d <= reach)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(v, _)| v)
+}
+
 /// The patch of every input triangle: connected components across the edges that
 /// are on no feature curve.
 pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
@@ -250,15 +262,7 @@ pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32], 
                 continue;
             }
             let cx = sw.mesh.vertices[k as usize];
-            let Some(v) = path
-                .iter()
-                .copied()
-                .filter(|&v| node_labels[v as usize].len() >= 3)
-                .map(|v| (v, norm(sub(w.mesh.nodes[v as usize], cx))))
-                .filter(|&(_, d)| d <= reach)
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|x| x.0)
-            else {
+            let Some(v) = nearest_path_node(&path, &node_labels, &w.mesh.nodes, cx, reach, 3, |_| true) else {
                 continue;
             };
             // each patch's angle at the corner: the sum of its triangles' angles there
@@ -336,15 +340,8 @@ pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32], 
         if taken_at.iter().any(|&p| norm(sub(p, cx)) < reach / 1.5) {
             continue;
         }
-        let best = |min_labels: usize| {
-            path.iter()
-                .copied()
-                .filter(|&v| node_labels[v as usize].len() >= min_labels && !taken.contains_key(&v))
-                .map(|v| (v, norm(sub(w.mesh.nodes[v as usize], cx))))
-                .filter(|&(_, d)| d <= reach)
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-        };
-        if let Some((v, _)) = best(3).or_else(|| best(2)) {
+        let best = |min_labels: usize| nearest_path_node(&path, &node_labels, &w.mesh.nodes, cx, reach, min_labels, |v| !taken.contains_key(&v));
+        if let Some(v) = best(3).or_else(|| best(2)) {
             taken.insert(v, k);
             taken_at.push(cx);
             rep.corners_held.push([v, ci as u32]);

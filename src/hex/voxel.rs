@@ -244,7 +244,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         if opts.goals.missed(&r) == 0 {
             best = r;
             best_res = predicted;
-        } else if r.quality.inverted > 0 || r.quality.min < opts.goals.min_scaled_jacobian || r.quality.mean < opts.goals.mean_scaled_jacobian {
+        } else if opts.goals.misses_scaled_jacobian(&r) {
             break;
         }
     }
@@ -825,7 +825,7 @@ fn mesh_lattice(
         // those corners; when the best so far misses a goal, the lattice without
         // the sheets as well; the best kept (HexOptions::feature_sheets)
         let sheets_kept = |r: &HexResult| kept_sheets(r).is_some();
-        let misses_quality = |r: &HexResult| r.quality.inverted > 0 || r.quality.min < opts.goals.min_scaled_jacobian || r.quality.mean < opts.goals.mean_scaled_jacobian;
+        let misses_quality = |r: &HexResult| opts.goals.misses_scaled_jacobian(r);
         let figures = |r: &HexResult| {
             let mut f = start_figures(r);
             f.as_object_mut().map(|o| o.remove("start"));
