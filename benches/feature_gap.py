@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Are the input vertices a hex mesh misses on the input's sharp edges? For each
 distance threshold (1 %, 0.75 %, 0.5 % of the bounding-box diagonal): how many
-input vertices are farther than it from the hex boundary (bilinear boundary quads
-sampled 5 x 5, as benches/surface_gap.py), how many of them lie on a sharp edge
+input vertices are farther than it from the hex boundary (exact distances to the
+boundary quads as four triangles each, as benches/surface_gap.py; 5 x 5 samples
+per quad until 2026-12-05), how many of them lie on a sharp edge
 (dihedral angle above ANGLE degrees, default 30; the hex stage's
 HexOptions::feature_angle is 40) or at a corner (three or more
 sharp edges), and the largest distance over the vertices on no sharp edge
@@ -47,14 +48,14 @@ def main():
     for c in cells:
         for f in sg.FACES:
             k=tuple(sorted(c[j] for j in f)); count[k]+=1; faces.setdefault(k,[c[j] for j in f])
-    uv=np.linspace(0,1,5); S=[]
+    T=[]
     for k,n in count.items():
         if n!=1: continue
-        q=pts[faces[k]]
-        for a in uv:
-            for b in uv: S.append((1-a)*(1-b)*q[0]+a*(1-b)*q[1]+a*b*q[2]+(1-a)*b*q[3])
-    S=np.array(S); diag=np.linalg.norm(V.max(0)-V.min(0))
-    d=np.array([np.min(np.linalg.norm(S-v,axis=1)) for v in V])/diag
+        q=pts[faces[k]]; c=q.mean(0)
+        for j in range(4): T.append((q[j],q[(j+1)%4],c))
+    T=np.array(T); diag=np.linalg.norm(V.max(0)-V.min(0))
+    # exact distances to the boundary quads as four triangles each (surface_gap.point_triangles)
+    d=np.array([sg.point_triangles(v,T) for v in V])/diag
     order=np.argsort(-d)
     for thr in [0.01,0.0075,0.005]:
         far=[i for i in order if d[i]>thr]

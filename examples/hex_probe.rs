@@ -4,7 +4,7 @@
 //! or `-- MESH voxelN [refinements]` for the voxel lattice mesh alone
 //! (the mesh goes to /tmp/voxel_probe.vtk; `HEX_NO_VOXEL=1` meshes the
 //! context without the grid-based fallback; `HEX_PIN=F` turns the coverage step on at F times the Hausdorff goal,
-//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library; `HEX_MIN` / `HEX_MEAN` set the scaled-Jacobian goals; `HEX_NARROW=DEG` the narrow corner faces' angle, 0 off).
+//! `HEX_HAUSDORFF=G` sets that goal, 0.01 by default; `HEX_CAPTURE=0` turns the sharp-edge capture steps off, on by default as in the library; `HEX_SHEETS=0` turns the feature sheets off, on by default as in the library; `HEX_MIN` / `HEX_MEAN` set the scaled-Jacobian goals; `HEX_NARROW=DEG` the narrow corner faces' angle, 0 off; `HEX_NARROW_PATCH=F` the narrow patches' width, 0 off; `HEX_MEDIAN=DEG` the feature curves' median angle).
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::mesh::{LoadOptions, TriMesh};
@@ -35,6 +35,14 @@ fn main() -> sddpm::Result<()> {
         // HEX_NARROW=DEG: narrow corner faces below DEG degrees (HexOptions::narrow_corner_faces, 70 by default; 0 off)
         if let Some(d) = std::env::var("HEX_NARROW").ok().and_then(|s| s.parse().ok()) {
             opts.narrow_corner_faces = d;
+        }
+        // HEX_MEDIAN=DEG: the feature curves' median dihedral angle (HexOptions::feature_median_angle, 60 by default)
+        if let Some(d) = std::env::var("HEX_MEDIAN").ok().and_then(|s| s.parse().ok()) {
+            opts.feature_median_angle = d;
+        }
+        // HEX_NARROW_PATCH=F: patches narrower than F lattice spacings merged (HexOptions::narrow_patch_width, 0.75 by default; 0 off)
+        if let Some(d) = std::env::var("HEX_NARROW_PATCH").ok().and_then(|s| s.parse().ok()) {
+            opts.narrow_patch_width = d;
         }
         // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
         opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);

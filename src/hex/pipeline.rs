@@ -211,6 +211,17 @@ pub struct HexOptions {
     /// voxels it comes to 0.75 % with every corner held, where releasing them
     /// gave 0.93 % (BENCHMARKS.md "One quad for a narrow face at a corner").
     pub narrow_corner_faces: f64,
+    /// With the feature sheets: an input patch (a face between sharp curves)
+    /// narrower than this fraction of the lattice's boundary edge (width: twice
+    /// its area over its perimeter) is merged into its neighbour before the
+    /// labelling; its curves and the corners no longer between three patches are
+    /// then not held (0: off). A strip that narrow gets a label region of one
+    /// quad or none, whose two sheets meet and fold. Default 0.75: hexgen_hepta's
+    /// chamfers and ledges (0.59-0.70 of the spacing at 12 voxels) merged, the
+    /// sheets hold there (2.14 -> 0.94 %); hexgen_rod's narrow faces at its
+    /// concave corners (0.79-0.90) keep their corners (BENCHMARKS.md "Narrow
+    /// patches merged").
+    pub narrow_patch_width: f64,
 }
 
 impl Default for HexOptions {
@@ -240,6 +251,7 @@ impl Default for HexOptions {
             capture_features: true,
             feature_sheets: true,
             narrow_corner_faces: 70.0,
+            narrow_patch_width: 0.75,
             local_refinement: 0,
             voxel_fallback: true,
             voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,
@@ -898,7 +910,7 @@ pub(crate) fn finish(
         let before = summary(&work.mesh);
         let elements_before = work.mesh.elements.len();
         let reach = SHEET_REACH * mean_boundary_edge(&work);
-        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners, opts.narrow_corner_faces) {
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners, opts.narrow_corner_faces, opts.narrow_patch_width) {
             Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
             Err(e) => serde_json::json!({ "error": e.to_string() }),
         };
