@@ -168,6 +168,8 @@ fn run_takes_the_fallback_options() {
         &["--voxel-resolution", "1"][..],
         &["--pin-uncovered=-1"][..],
         &["--pin-uncovered", "nan"][..],
+        &["--feature-median-angle", "200"][..],
+        &["--feature-median-angle", "nan"][..],
         &["--goal-hausdorff", "0"][..],
         &["--goal-min-sj=-1"][..],
         &["--goal-mean-sj", "1.5"][..],

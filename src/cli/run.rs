@@ -43,6 +43,9 @@ pub struct HexArgs {
     /// No feature sheets (by default the fallback's lattice meshes get a sheet of elements under each surface patch so that their boundary follows the sharp curves; docs/hex.md).
     #[arg(long)]
     pub no_feature_sheets: bool,
+    /// Feature curves whose median dihedral angle is below DEG degrees are ignored (default 60: creases of CAD parts, not facets of a coarse tessellation; e.g. 40 to follow 45-degree chamfers; docs/hex.md "Surface map").
+    #[arg(long, value_name = "DEG")]
+    pub feature_median_angle: Option<f64>,
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
@@ -80,6 +83,12 @@ pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> 
     hex.feature_sheets = !a.no_feature_sheets;
     if let Some(n) = a.local_refinement {
         hex.local_refinement = n;
+    }
+    if let Some(d) = a.feature_median_angle {
+        if !(0.0..=180.0).contains(&d) {
+            return Err(Error::InvalidArgument(format!("--feature-median-angle must be an angle in degrees in [0, 180], got {d}")));
+        }
+        hex.feature_median_angle = d;
     }
     if let Some(f) = a.pin_uncovered {
         if !(f.is_finite() && f >= 0.0) {
