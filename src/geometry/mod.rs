@@ -20,9 +20,11 @@
 
 pub mod bvh;
 pub mod orient;
+pub(crate) mod union_find;
 pub mod vec3;
 
 pub use bvh::{closest_point_on_triangle, Aabb, Bvh, ClosestPoint, SurfaceLocator};
+pub(crate) use union_find::UnionFind;
 
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;

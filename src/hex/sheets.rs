@@ -26,6 +26,7 @@ use super::surface::Surface;
 use super::topology::{boundary_quads, hex_volume, HEX_FACES};
 use crate::error::{Error, Result};
 use crate::geometry::vec3::*;
+use crate::geometry::UnionFind;
 use std::collections::HashMap;
 
 /// The sheets go under the quads within this many rings of a path (one ring:
@@ -99,14 +100,7 @@ pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
         }
     }
     let mut edge_tri: HashMap<(u32, u32), u32> = HashMap::with_capacity(m.triangles.len() * 2);
-    let mut parent: Vec<u32> = (0..m.triangles.len() as u32).collect();
-    fn find(p: &mut [u32], mut i: u32) -> u32 {
-        while p[i as usize] != i {
-            p[i as usize] = p[p[i as usize] as usize];
-            i = p[i as usize];
-        }
-        i
-    }
+    let mut uf = UnionFind::new(m.triangles.len());
     for (t, tri) in m.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
@@ -115,24 +109,13 @@ pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
                 continue;
             }
             if let Some(&u) = edge_tri.get(&key) {
-                let (ra, rb) = (find(&mut parent, u), find(&mut parent, t as u32));
-                if ra != rb {
-                    parent[ra as usize] = rb;
-                }
+                uf.union(u, t as u32);
             } else {
                 edge_tri.insert(key, t as u32);
             }
         }
     }
-    let mut id = HashMap::new();
-    let patch: Vec<u32> = (0..m.triangles.len() as u32)
-        .map(|t| {
-            let r = find(&mut parent, t);
-            let n = id.len() as u32;
-            *id.entry(r).or_insert(n)
-        })
-        .collect();
-    (patch, id.len())
+    uf.labels()
 }
 
 /// The mean length of the boundary quads' edges.
@@ -182,14 +165,7 @@ pub fn merge_narrow_patches(sw: &Surface, tri_patch: Vec<u32>, np: usize, width:
     let narrow: Vec<bool> = wid.iter().map(|&x| x < width).collect();
     let mut order: Vec<usize> = (0..np).filter(|&p| narrow[p]).collect();
     order.sort_by(|&a, &b| wid[a].total_cmp(&wid[b]));
-    let mut parent: Vec<usize> = (0..np).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
+    let mut uf = UnionFind::new(np);
     let unit = |v: [f64; 3]| {
         let l = norm(v);
         if l > 0.0 { scale(v, 1.0 / l) } else { v }
@@ -206,24 +182,13 @@ pub fn merge_narrow_patches(sw: &Surface, tri_patch: Vec<u32>, np: usize, width:
             }
         }
         if let Some((_, _, q)) = best {
-            let (rp, rq) = (find(&mut parent, p), find(&mut parent, q));
-            if rp != rq {
-                parent[rp] = rq;
+            if uf.union(p as u32, q as u32) {
                 merged += 1;
             }
         }
     }
-    let mut id = HashMap::new();
-    let out: Vec<u32> = tri_patch
-        .iter()
-        .map(|&p| {
-            let r = find(&mut parent, p as usize);
-            let n = id.len() as u32;
-            *id.entry(r).or_insert(n)
-        })
-        .collect();
-    let n = id.len();
-    (out, n, merged)
+    let (label, n) = uf.labels();
+    (tri_patch.iter().map(|&p| label[p as usize]).collect(), n, merged)
 }
 
 /// Insert the feature sheets into a pillowed mesh (every boundary quad on its own
@@ -703,33 +668,23 @@ fn insert_sheet(w: &mut Work, in_s: &[bool]) -> (usize, usize, usize) {
             }
         }
     }
-    let mut parent: Vec<usize> = (0..slots.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
+    let mut uf = UnionFind::new(slots.len());
     for (k, fs) in &faces {
         if let [(e1, _), (e2, _)] = fs[..] {
             for &v in k {
                 if let (Some(&a), Some(&b)) = (slot.get(&(e1, v)), slot.get(&(e2, v))) {
-                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                    if ra != rb {
-                        parent[ra] = rb;
-                    }
+                    uf.union(a as u32, b as u32);
                 }
             }
         }
     }
     // one copy per group
     let n0 = w.mesh.nodes.len();
-    let mut copy_of_root: HashMap<usize, u32> = HashMap::new();
+    let mut copy_of_root: HashMap<u32, u32> = HashMap::new();
     let mut group_sum: Vec<([f64; 3], usize)> = Vec::new();
     let mut copy_of_slot = vec![0u32; slots.len()];
     for s in 0..slots.len() {
-        let r = find(&mut parent, s);
+        let r = uf.find(s as u32);
         let (e, v) = slots[s];
         let c = *copy_of_root.entry(r).or_insert_with(|| {
             let id = (n0 + group_sum.len()) as u32;

@@ -5,7 +5,7 @@
 use super::TriMesh;
 use crate::error::Error;
 use crate::geometry::vec3::{cross, dot, norm, sub};
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, UnionFind};
 use serde::Serialize;
 
 /// Triangles whose area is below this times their longest edge squared are degenerate.
@@ -161,30 +161,6 @@ impl EdgeTable {
 
     pub fn incidences(&self, e: &([u32; 2], std::ops::Range<usize>)) -> &[(u32, bool)] {
         &self.inc[e.1.clone()]
-    }
-}
-
-struct UnionFind(Vec<u32>);
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        UnionFind((0..n as u32).collect())
-    }
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let p = self.0[x as usize];
-            self.0[x as usize] = self.0[p as usize];
-            x = p;
-        }
-        x
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            // keep the smaller id as root: deterministic
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            self.0[hi as usize] = lo;
-        }
     }
 }
 
