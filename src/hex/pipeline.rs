@@ -909,8 +909,8 @@ pub(crate) fn finish(
         let t0 = Instant::now();
         let before = summary(&work.mesh);
         let elements_before = work.mesh.elements.len();
-        let reach = SHEET_REACH * mean_boundary_edge(&work);
-        let mut details = match super::sheets::feature_sheets(&mut work, sw, reach, &lv.released_corners, opts.narrow_corner_faces, opts.narrow_patch_width) {
+        let edge = mean_boundary_edge(&work);
+        let mut details = match super::sheets::feature_sheets(&mut work, sw, SHEET_REACH * edge, &lv.released_corners, opts.narrow_corner_faces, opts.narrow_patch_width * edge) {
             Ok(rep) => serde_json::to_value(&rep).unwrap_or_default(),
             Err(e) => serde_json::json!({ "error": e.to_string() }),
         };

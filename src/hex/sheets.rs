@@ -118,18 +118,6 @@ pub fn triangle_patches(sw: &Surface) -> (Vec<u32>, usize) {
     uf.labels()
 }
 
-/// The mean length of the boundary quads' edges.
-fn mean_quad_edge(nodes: &[[f64; 3]], bq: &[super::topology::BoundaryQuad]) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for q in bq {
-        for i in 0..4 {
-            s += norm(sub(nodes[q.nodes[i] as usize], nodes[q.nodes[(i + 1) % 4] as usize]));
-            n += 1;
-        }
-    }
-    if n == 0 { 0.0 } else { s / n as f64 }
-}
-
 /// Merge every patch narrower than `width` (twice its area over its perimeter:
 /// a strip's width, a disc's radius) into the neighbour it shares the most
 /// boundary with, weighted by how alike their normals are (a chamfer or a ledge
@@ -137,7 +125,8 @@ fn mean_quad_edge(nodes: &[[f64; 3]], bq: &[super::topology::BoundaryQuad]) -> f
 /// would meet). Narrowest first; a narrow patch prefers a neighbour that is not.
 /// Returns the merged patch of every triangle, the patch count and how many were
 /// merged.
-pub fn merge_narrow_patches(sw: &Surface, tri_patch: Vec<u32>, np: usize, width: f64) -> (Vec<u32>, usize, usize) {
+/// `edge_tris`: the triangles on each edge of the surface (surface::edge_triangles).
+pub fn merge_narrow_patches(sw: &Surface, edge_tris: &HashMap<(u32, u32), Vec<u32>>, tri_patch: &[u32], np: usize, width: f64) -> (Vec<u32>, usize, usize) {
     let m = &sw.mesh;
     let mut area = vec![0.0; np];
     let mut normal = vec![[0.0; 3]; np];
@@ -150,7 +139,7 @@ pub fn merge_narrow_patches(sw: &Surface, tri_patch: Vec<u32>, np: usize, width:
     }
     let mut perim = vec![0.0; np];
     let mut shared: HashMap<(u32, u32), f64> = HashMap::new();
-    for (&(a, b), ts) in super::surface::edge_triangles(m).iter() {
+    for (&(a, b), ts) in edge_tris {
         if let [t0, t1] = ts[..] {
             let (p, q) = (tri_patch[t0 as usize], tri_patch[t1 as usize]);
             if p != q {
@@ -199,43 +188,48 @@ pub fn merge_narrow_patches(sw: &Surface, tri_patch: Vec<u32>, np: usize, width:
 /// `sw.features.corners`; the nodes there go onto one of the corner's curves).
 /// A face whose angle at a held corner is below `narrow_deg` degrees keeps the
 /// lattice's quads there, out of its sheet (0: none). A patch narrower than
-/// `narrow_width` times the mean boundary edge is merged into a neighbour first
-/// ([`merge_narrow_patches`]; 0: none).
+/// `narrow_width` (a length in the working frame) is merged into a neighbour
+/// first ([`merge_narrow_patches`]; 0: none).
 /// Leaves `w` unchanged and returns an error when the mesh is not pillowed or
 /// the result would not be conforming.
 pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32], narrow_deg: f64, narrow_width: f64) -> Result<SheetReport> {
     let mut rep = SheetReport::default();
-    let bq = boundary_quads(&w.mesh).map_err(Error::MeshingFailed)?;
+    let edge_tris = super::surface::edge_triangles(&sw.mesh);
     let (tri_patch0, np0) = triangle_patches(sw);
-    let (tri_patch, np, merged) = if narrow_width > 0.0 {
-        merge_narrow_patches(sw, tri_patch0.clone(), np0, narrow_width * mean_quad_edge(&w.mesh.nodes, &bq))
-    } else {
-        (tri_patch0.clone(), np0, 0)
+    let merge = (narrow_width > 0.0).then(|| merge_narrow_patches(sw, &edge_tris, &tri_patch0, np0, narrow_width)).filter(|m| m.2 > 0);
+    // the feature corners still held: all when no patch was merged, else those
+    // the merge left between as many patches as before, or between three or more
+    let corner_held_ok: Vec<bool> = match &merge {
+        None => vec![true; sw.features.corners.len()],
+        Some((tri_patch, _, _)) => {
+            let index: HashMap<u32, usize> = sw.features.corners.iter().enumerate().map(|(i, &k)| (k, i)).collect();
+            let mut around: Vec<(Vec<u32>, Vec<u32>)> = vec![(Vec::new(), Vec::new()); index.len()];
+            for (t, tri) in sw.mesh.triangles.iter().enumerate() {
+                for x in tri {
+                    if let Some(&i) = index.get(x) {
+                        let (before, after) = &mut around[i];
+                        if !before.contains(&tri_patch0[t]) {
+                            before.push(tri_patch0[t]);
+                        }
+                        if !after.contains(&tri_patch[t]) {
+                            after.push(tri_patch[t]);
+                        }
+                    }
+                }
+            }
+            sw.features.corners.iter().map(|k| {
+                let (before, after) = &around[index[k]];
+                after.len() >= 3 || after.len() == before.len()
+            }).collect()
+        }
     };
+    let (tri_patch, np, merged) = merge.unwrap_or((tri_patch0, np0, 0));
     rep.patches = np;
     rep.narrow_patches_merged = merged;
     if np < 2 {
         return Ok(rep);
     }
-    // the feature corners still held: those the merge left between as many
-    // patches as before, or between three or more
-    let corner_held_ok: Vec<bool> = {
-        let patches_around = |tp: &[u32]| -> HashMap<u32, usize> {
-            let mut around: HashMap<u32, Vec<u32>> = sw.features.corners.iter().map(|&k| (k, Vec::new())).collect();
-            for (t, tri) in sw.mesh.triangles.iter().enumerate() {
-                for &x in tri {
-                    if let Some(l) = around.get_mut(&x) {
-                        if !l.contains(&tp[t]) {
-                            l.push(tp[t]);
-                        }
-                    }
-                }
-            }
-            around.into_iter().map(|(k, l)| (k, l.len())).collect()
-        };
-        let (before, after) = (patches_around(&tri_patch0), patches_around(&tri_patch));
-        sw.features.corners.iter().map(|k| after[k] >= 3 || after[k] == before[k]).collect()
-    };
+    let bq = boundary_quads(&w.mesh).map_err(Error::MeshingFailed)?;
     let ne0 = w.mesh.elements.len();
     // every boundary quad on its own element (a pillowed mesh)
     let mut owner = vec![u32::MAX; ne0];
@@ -389,7 +383,6 @@ pub fn feature_sheets(w: &mut Work, sw: &Surface, reach: f64, released: &[u32], 
     }
     // ---- the path nodes onto the curves and corners ----
     // curves by the pair of patches on their two sides
-    let edge_tris = super::surface::edge_triangles(&sw.mesh);
     let mut pair_curves: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
     for (c, cv) in sw.features.curves.iter().enumerate() {
         let mut pairs = std::collections::BTreeSet::new();
@@ -803,7 +796,8 @@ mod tests {
         assert_eq!(np, 7);
         // the chamfer: 0.0707 wide, twice its area over its perimeter 0.066
         let chamfer = tp[tp.len() - 1];
-        let (merged, n, k) = merge_narrow_patches(&sw, tp.clone(), np, 0.1);
+        let et = crate::hex::surface::edge_triangles(&mesh);
+        let (merged, n, k) = merge_narrow_patches(&sw, &et, &tp, np, 0.1);
         assert_eq!((n, k), (6, 1));
         // into the y = 1 face (triangles 10, 11) or the z = 1 face (12, 13), which
         // share as much of its boundary and are as steep to it
@@ -816,7 +810,7 @@ mod tests {
         faces.dedup();
         assert_eq!(faces.len(), 6);
         // a limit under its width: nothing merged
-        let (same, n, k) = merge_narrow_patches(&sw, tp.clone(), np, 0.05);
+        let (same, n, k) = merge_narrow_patches(&sw, &et, &tp, np, 0.05);
         assert_eq!((n, k), (7, 0));
         assert_eq!(same.iter().filter(|&&p| p == same[same.len() - 1]).count(), tp.iter().filter(|&&p| p == chamfer).count());
     }
