@@ -1095,12 +1095,13 @@ mod tests {
 
     #[test]
     fn the_fallback_tries_coarser_lattices_while_the_kept_one_has_room() {
-        // hexgen_rod, default options: 24 voxels miss the distance goal (1.90 %),
+        // hexgen_rod, default options: 24 voxels miss the distance goal (1.88 %),
         // 48 meet every goal with room (0.66 %), the lattice predicted from the
-        // two (38 voxels, 0.63 %) has room again, and the next one predicted from
-        // 24 and 38 (33 voxels, 0.75 %) is kept: 2,572 elements where the first
-        // prediction alone kept 3,752 (BENCHMARKS.md "Coarser lattices while the
-        // kept one has room")
+        // two (38 voxels, 0.57 %) has room again, the next one predicted from
+        // 24 and 38 (32 voxels) misses the goal (1.13 %) and the one between (34,
+        // 0.53 %) is kept: 2,935 elements where the first prediction alone kept
+        // 3,752 (BENCHMARKS.md "Coarser lattices while the kept one has room",
+        // "Boundary mean ascent"; before the boundary ascent 33 voxels were kept)
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
@@ -1114,9 +1115,10 @@ mod tests {
         // two coarser lattices after the finest, each coarser than the last
         assert!(res.len() >= 4 && res[2] < 48 && res[3] < res[2], "{meshed:?}");
         assert_eq!(opts.goals.missed(&r), 0, "{:?} {}", r.quality, r.hausdorff_relative);
+        // kept: a lattice coarser than the first prediction, with fewer elements
         let kept: u64 = r.domain.trim_start_matches("voxel ").parse().unwrap();
-        assert!(kept <= res[3], "{} {meshed:?}", r.domain);
-        assert!(r.quality.elements < 3_000, "{}", r.quality.elements);
+        assert!(kept < res[2], "{} {meshed:?}", r.domain);
+        assert!(r.quality.elements < meshed[2]["elements"].as_u64().unwrap() as usize, "{} {meshed:?}", r.quality.elements);
     }
 
     #[test]
