@@ -845,7 +845,8 @@ fn local_sum(w: &Work, v: u32, x: [f64; 3]) -> (f64, f64, usize) {
 /// mean, which the max-min steps and the mean-ratio energy do not aim at. Boundary
 /// nodes stay where the fit put them: sliding them too raised the mean a little more
 /// (cgal_pinion at 48 voxels 0.862 against 0.857) but moved the boundary off sharp
-/// edges (cgal_dragknob at 42 voxels: Hausdorff 0.996 % -> 1.04 %). The first pass
+/// edges (cgal_dragknob at 42 voxels: Hausdorff 0.996 % -> 1.04 %);
+/// [`boundary_mean_ascent`] slides them with a fit guard. The first pass
 /// visits every interior node, later passes the neighbourhood of nodes that moved.
 /// `cancel(pass)` is asked before every pass; true stops there.
 pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64, cancel: impl FnMut(usize) -> bool) -> MoveStats {
