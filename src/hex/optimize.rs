@@ -861,8 +861,8 @@ pub fn mean_ascent(w: &mut Work, passes: usize, floor: f64, cancel: impl FnMut(u
 /// comes to lie farther from its quad than it was, or than
 /// [`FIT_GUARD_SHARE`] of the largest such distance). Without that guard the
 /// slides took nodes off the sharp edges they fit (hexgen_hepta at 12 voxels:
-/// 1.49 -> 1.55 %, holding the nodes within half an edge of a sharp input edge
-/// instead: 1.65 %). The caller decides whether the result is kept
+/// 1.49 -> 1.98 %, holding the nodes within half an edge of a sharp input edge
+/// instead: 1.55 %). The caller decides whether the result is kept
 /// (`HexOptions::boundary_ascent`).
 pub fn boundary_mean_ascent(w: &mut Work, sw: &Surface, passes: usize, floor: f64, cancel: impl FnMut(usize) -> bool) -> MoveStats {
     let movable: Vec<bool> = w.role.iter().map(|&r| !matches!(r, Role::Corner(_))).collect();
