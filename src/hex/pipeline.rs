@@ -797,11 +797,13 @@ fn mean_boundary_edge(w: &Work) -> f64 {
     }
 }
 
-/// A step that moves boundary nodes towards the input (capture, coverage), kept only
-/// when it brings the boundary closer to the input (two-sided Hausdorff distance)
-/// without an inverted element or a minimum below both the one before and the goal
-/// (with `hold_mean`, nor a mean below both the one before and its goal: for a step
-/// after the optimisation, whose mesh is the result; [`fit_step_kept`]). `step` gets
+/// A step that moves boundary nodes (capture, coverage, the boundary mean ascent),
+/// undone unless `keep(before, after, h0, h1)` holds for the quality before and
+/// after and the two-sided Hausdorff distances before and after; for the steps
+/// towards the input [`fit_step_kept`]: closer to it without an inverted element or
+/// a minimum below both the one before and the goal (with `hold_mean`, nor a mean
+/// below both the one before and its goal: for a step after the optimisation,
+/// whose mesh is the result). `step` gets
 /// the floor no element may go below (min(before, goal + 0.05)) and says whether it
 /// had anything to do (else no stage is reported), whether it moved a node, and its
 /// details.
@@ -810,7 +812,7 @@ fn guarded_fit_step(
     sw: &Surface,
     opts: &HexOptions,
     name: &str,
-    hold_mean: bool,
+    keep: impl FnOnce(&QualitySummary, &QualitySummary, f64, f64) -> bool,
     stages: &mut Vec<StageReport>,
     step: impl FnOnce(&mut Work, f64) -> (bool, bool, serde_json::Value),
 ) {
@@ -825,7 +827,7 @@ fn guarded_fit_step(
     let after = summary(&work.mesh);
     let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
     let h1 = if moved { hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative } else { h0 };
-    let kept = moved && fit_step_kept(&before, &after, h0, h1, &opts.goals, hold_mean);
+    let kept = moved && keep(&before, &after, h0, h1);
     if !kept {
         (work.mesh.nodes, work.role, work.attach) = saved;
     }
@@ -957,7 +959,7 @@ pub(crate) fn finish(
     // ---- sharp-edge capture: boundary nodes onto the feature curves near them ----
     if opts.capture_features {
         let reach = CAPTURE_REACH * mean_boundary_edge(&work);
-        guarded_fit_step(&mut work, sw, opts, "capture", false, &mut stages, |w, floor| {
+        guarded_fit_step(&mut work, sw, opts, "capture", |b, a, h0, h1| fit_step_kept(b, a, h0, h1, &opts.goals, false), &mut stages, |w, floor| {
             let st = optimize::capture_features(w, sw, reach, opts.surface_relax_iterations, floor);
             (st.candidates > 0, st.snapped + st.lifted > 0, serde_json::to_value(st).unwrap_or_default())
         });
@@ -966,7 +968,7 @@ pub(crate) fn finish(
     // ---- coverage: boundary nodes pinned to the input vertices the boundary misses ----
     if opts.pin_uncovered > 0.0 && opts.goals.hausdorff > 0.0 {
         let tol = opts.pin_uncovered * opts.goals.hausdorff * sw.bbox.diagonal();
-        guarded_fit_step(&mut work, sw, opts, "coverage", false, &mut stages, |w, floor| {
+        guarded_fit_step(&mut work, sw, opts, "coverage", |b, a, h0, h1| fit_step_kept(b, a, h0, h1, &opts.goals, false), &mut stages, |w, floor| {
             let st = optimize::cover_uncovered_vertices(w, sw, tol, opts.surface_relax_iterations, floor);
             (st.uncovered > 0, st.pinned > 0, serde_json::to_value(st).unwrap_or_default())
         });
@@ -1048,7 +1050,7 @@ pub(crate) fn finish(
     if opts.capture_features && passes > 0 && summary(&work.mesh).inverted == 0 {
         check_progress(progress, 0.95, "hex: recapture")?;
         let reach = CAPTURE_REACH * mean_boundary_edge(&work);
-        guarded_fit_step(&mut work, sw, opts, "recapture", true, &mut stages, |w, floor| {
+        guarded_fit_step(&mut work, sw, opts, "recapture", |b, a, h0, h1| fit_step_kept(b, a, h0, h1, &opts.goals, true), &mut stages, |w, floor| {
             let st = optimize::capture_features(w, sw, reach, opts.surface_relax_iterations, floor);
             let moved = st.snapped + st.lifted > 0;
             let mut details = serde_json::to_value(st).unwrap_or_default();
@@ -1070,28 +1072,21 @@ pub(crate) fn finish(
     // ---- boundary mean ascent: the boundary nodes slide too, kept when the fit holds ----
     if opts.boundary_ascent && passes > 0 && summary(&work.mesh).inverted == 0 {
         check_progress(progress, 0.958, "hex: boundary ascent")?;
-        let t0 = Instant::now();
-        let before = summary(&work.mesh);
-        let saved = (work.mesh.nodes.clone(), work.attach.clone());
-        let st = optimize::boundary_mean_ascent(&mut work, sw, passes, before.min, pass_reporter(progress, 0.958, 0.002, passes, &mut cancelled));
+        let keep = |before: &QualitySummary, after: &QualitySummary, h0: f64, h1: f64| {
+            after.mean > before.mean && after.inverted == 0 && after.min >= before.min && h1 <= h0
+        };
+        guarded_fit_step(&mut work, sw, opts, "boundary ascent", keep, &mut stages, |w, _| {
+            let m = summary(&w.mesh).min;
+            let st = optimize::boundary_mean_ascent(w, sw, passes, m, pass_reporter(progress, 0.958, 0.002, passes, &mut cancelled));
+            let mut details = serde_json::to_value(st).unwrap_or_default();
+            if let Some(d) = details.as_object_mut() {
+                d.insert("mean_after_ascent".into(), serde_json::json!(summary(&w.mesh).mean));
+            }
+            (true, st.moves_accepted > 0, details)
+        });
         if cancelled {
             return Err(Error::Cancelled("hex: boundary ascent".into()));
         }
-        let after = summary(&work.mesh);
-        let h0 = hausdorff(&HexMesh { nodes: saved.0.clone(), elements: work.mesh.elements.clone() }, &sw.mesh, opts.hausdorff_samples).relative;
-        let h1 = if after.mean > before.mean { hausdorff(&work.mesh, &sw.mesh, opts.hausdorff_samples).relative } else { h0 };
-        let kept = after.mean > before.mean && after.inverted == 0 && after.min >= before.min && h1 <= h0;
-        if !kept {
-            (work.mesh.nodes, work.attach) = saved;
-        }
-        let mut details = serde_json::to_value(st).unwrap_or_default();
-        if let Some(d) = details.as_object_mut() {
-            d.insert("mean_after_ascent".into(), serde_json::json!(after.mean));
-            d.insert("hausdorff_relative_before".into(), serde_json::json!(h0));
-            d.insert("hausdorff_relative_after".into(), serde_json::json!(h1));
-            d.insert("kept".into(), serde_json::json!(kept));
-        }
-        stages.push(stage_report("boundary ascent", before, &work.mesh, t0, details));
     }
     let q_final = summary(&work.mesh);
 
