@@ -44,6 +44,10 @@ fn main() -> sddpm::Result<()> {
         if let Some(d) = std::env::var("HEX_NARROW_PATCH").ok().and_then(|s| s.parse().ok()) {
             opts.narrow_patch_width = d;
         }
+        // HEX_ALIGN=F: lattice planes on the axis-parallel faces of at least F of the area (HexOptions::lattice_planes)
+        if let Some(d) = std::env::var("HEX_ALIGN").ok().and_then(|s| s.parse().ok()) {
+            opts.lattice_planes = d;
+        }
         // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
         opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)

@@ -131,8 +131,12 @@ fn run_takes_the_fallback_options() {
     assert_eq!(v["hex"]["inverted"], 0);
     assert!(v["hex"]["hausdorff_relative"].as_f64().unwrap() < 0.025, "{}", v["hex"]);
     let report = last_report();
+    // the 12-voxel lattice, then again with its planes on the input's faces
+    // (hepta's base, ledge, top and flat side; 3.5 % away there: not kept)
     let meshed = report["hex"]["stages"][0]["details"]["lattices_meshed"].as_array().unwrap();
-    assert_eq!(meshed.len(), 1, "{meshed:?}");
+    assert_eq!(meshed.len(), 2, "{meshed:?}");
+    assert!(meshed[0]["planes_on_faces"].is_null() && meshed[1]["planes_on_faces"] == serde_json::json!(true), "{meshed:?}");
+    assert!(meshed.iter().all(|m| m["resolution"] == 12), "{meshed:?}");
     let stages: Vec<&str> = report["hex"]["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
     assert!(stages.contains(&"capture") && stages.contains(&"coverage") && stages.contains(&"recapture"), "{stages:?}");
     // the capture after the optimisation is kept only when it brings the boundary closer
@@ -141,8 +145,9 @@ fn run_takes_the_fallback_options() {
     assert_eq!(d["kept"], serde_json::json!(true), "{d}");
     assert!(d["hausdorff_relative_after"].as_f64().unwrap() < d["hausdorff_relative_before"].as_f64().unwrap(), "{d}");
     // --no-capture-features: neither capture step; --local-refinement 1: the
-    // 12-voxel lattice is meshed a second time with some voxels split
-    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features", "--local-refinement", "1"]).collect();
+    // 12-voxel lattice is meshed a second time with some voxels split;
+    // --lattice-planes 0: not with its planes on the faces
+    let args: Vec<&str> = common.iter().copied().chain(["--voxel-resolution", "12", "--voxel-refinements", "0", "--no-capture-features", "--local-refinement", "1", "--lattice-planes", "0"]).collect();
     let (code, _, err) = sddpm(&args);
     assert_eq!(code, 0, "{err}");
     let report = last_report();
@@ -169,6 +174,9 @@ fn run_takes_the_fallback_options() {
         &["--pin-uncovered=-1"][..],
         &["--pin-uncovered", "nan"][..],
         &["--feature-median-angle", "200"][..],
+        &["--lattice-planes", "1"][..],
+        &["--lattice-planes=-0.1"][..],
+        &["--lattice-planes", "nan"][..],
         &["--feature-median-angle", "nan"][..],
         &["--goal-hausdorff", "0"][..],
         &["--goal-min-sj=-1"][..],

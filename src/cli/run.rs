@@ -46,6 +46,9 @@ pub struct HexArgs {
     /// Feature curves whose median dihedral angle is below DEG degrees are ignored (default 60: creases of CAD parts, not facets of a coarse tessellation; e.g. 40 to follow 45-degree chamfers; docs/hex.md "Surface map").
     #[arg(long, value_name = "DEG")]
     pub feature_median_angle: Option<f64>,
+    /// The fallback's kept lattice is meshed again with its planes on the input's axis-parallel planar faces of at least F of its area, and kept when it ranks better (default 0.02; 0: off; docs/hex.md "Lattice planes on the faces").
+    #[arg(long, value_name = "F")]
+    pub lattice_planes: Option<f64>,
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F")]
     pub pin_uncovered: Option<f64>,
@@ -89,6 +92,12 @@ pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> 
             return Err(Error::InvalidArgument(format!("--feature-median-angle must be an angle in degrees in [0, 180], got {d}")));
         }
         hex.feature_median_angle = d;
+    }
+    if let Some(f) = a.lattice_planes {
+        if !(0.0..1.0).contains(&f) {
+            return Err(Error::InvalidArgument(format!("--lattice-planes must be a share of the area in [0, 1), got {f}")));
+        }
+        hex.lattice_planes = f;
     }
     if let Some(f) = a.pin_uncovered {
         if !(f.is_finite() && f >= 0.0) {

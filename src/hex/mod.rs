@@ -5,6 +5,7 @@
 pub mod distance;
 pub mod frame;
 pub mod grid;
+pub mod lattice;
 pub mod map;
 pub mod optimize;
 pub mod pillow;

@@ -234,7 +234,18 @@ pub struct HexOptions {
     /// and 0.69 -> 0.63 %, hexgen_hepta at 12 0.871 -> 0.877 at the same 1.49 %
     /// (BENCHMARKS.md "Boundary mean ascent").
     pub boundary_ascent: bool,
+    /// Voxel fallback: the kept lattice is meshed again with its planes moved
+    /// onto the input's axis-parallel planar faces of at least this share of
+    /// the input's area ([`super::lattice::LatticePlanes::aligned`]), and that
+    /// mesh kept when it ranks better ([`QualityGoals::rank`]); 0: the uniform
+    /// lattice alone. Default [`LATTICE_PLANES_SHARE`].
+    pub lattice_planes: f64,
 }
+
+/// Default [`HexOptions::lattice_planes`]: a face of 2 % of the area or more
+/// (hexgen_hepta's base, ledge and top: 21 / 8 / 7 %, its flat side 5 %, its
+/// lugs' faces 0.8 %; hexgen_rod's two sides 11 / 10 %, its steps 1 % and less).
+pub const LATTICE_PLANES_SHARE: f64 = 0.02;
 
 impl Default for HexOptions {
     fn default() -> Self {
@@ -265,6 +276,7 @@ impl Default for HexOptions {
             narrow_corner_faces: 70.0,
             narrow_patch_width: 0.75,
             boundary_ascent: true,
+            lattice_planes: LATTICE_PLANES_SHARE,
             local_refinement: 0,
             voxel_fallback: true,
             voxel_resolution: super::voxel::VOXEL_START_RESOLUTION,

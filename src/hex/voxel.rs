@@ -27,7 +27,8 @@ use super::optimize::Work;
 use super::pipeline::{finish, relax_and_refit, working_frames, HexOptions, HexResult, Level, LevelReport, SurfaceMapReport};
 use super::topology;
 use super::{Affine, HexMesh};
-use crate::context::volume::{betti, voxelize};
+use super::lattice::LatticePlanes;
+use crate::context::volume::betti;
 use crate::error::{check_progress, Error, Progress, Result, SubProgress};
 use crate::geometry::vec3::{add, norm, scale, sub};
 use crate::mesh::TriMesh;
@@ -155,7 +156,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     let mut tried = Vec::new();
     let mut res = opts.voxel_resolution.clamp(2, VOXEL_MAX_RESOLUTION);
     let lattice = loop {
-        let (lattice, fits) = topology_lattice(&fr.sw.mesh, res, genus, opts, &mut tried)?;
+        let (lattice, fits) = topology_lattice(&fr.sw.mesh, res, false, genus, opts, &mut tried)?;
         if let Some(l) = lattice {
             break l;
         }
@@ -186,7 +187,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
         // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
         let lattice = loop {
-            let (lattice, fits) = topology_lattice(&fr.sw.mesh, next, genus, opts, &mut tried)?;
+            let (lattice, fits) = topology_lattice(&fr.sw.mesh, next, false, genus, opts, &mut tried)?;
             if lattice.is_some() || !fits || next >= VOXEL_MAX_RESOLUTION {
                 break lattice;
             }
@@ -236,7 +237,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         if !(slope.is_finite() && slope > 0.0 && predicted > b.0 && predicted * 10 <= best_res * 9) || meshed.iter().any(|m| m.0 == predicted) {
             break;
         }
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, genus, opts, &mut tried)?;
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, false, genus, opts, &mut tried)?;
         let Some(lattice) = lattice else { break };
         let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
         let r = mesh_lattice(lattice, predicted, None, &fr, opts, t_all, &mut sub)?;
@@ -248,6 +249,23 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
             break;
         }
     }
+    // The kept lattice again with its planes moved onto the input's large
+    // axis-parallel faces (HexOptions::lattice_planes), kept when it ranks better
+    let mut best_on_faces = false;
+    let mut on_faces_meshed = None;
+    if opts.lattice_planes > 0.0 && !LatticePlanes::aligned(&fr.sw.mesh, best_res, opts.lattice_planes).is_uniform() {
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, true, genus, opts, &mut tried)?;
+        if let Some(lattice) = lattice {
+            let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
+            let r = mesh_lattice(lattice, best_res, None, &fr, opts, t_all, &mut sub)?;
+            meshed.push((best_res, r.quality.elements, r.quality.min, r.quality.mean, r.hausdorff_relative));
+            on_faces_meshed = Some(meshed.len() - 1);
+            if opts.goals.beats(&r, Some(&best)) {
+                best = r;
+                best_on_faces = true;
+            }
+        }
+    }
     // Local refinement (HexOptions::local_refinement): the best lattice again, with
     // the voxels around the points farthest from the last mesh split 3 x 3 x 3
     let mut carve_failed: Vec<String> = Vec::new();
@@ -255,19 +273,19 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     // figures of every start's mesh)
     let mut round_starts: Vec<(usize, serde_json::Value, Vec<serde_json::Value>)> = Vec::new();
     if opts.local_refinement > 0 && best.hausdorff_relative > 0.0 {
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, genus, opts, &mut tried)?;
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, best_on_faces, genus, opts, &mut tried)?;
         if let Some(lattice) = lattice {
             let mut boxes: Vec<([u32; 3], [u32; 3])> = Vec::new();
             let mut from = best.mesh.clone();
             // the coarse lattice fitted to the surface, for the fitted start of every
             // round, and the fine voxels for the re-voxelised start
             let mut fit_cache = None;
-            let fine_in = fine_voxels(&fr.sw.mesh, &lattice.vol);
+            let fine_in = fine_voxels(&fr.sw.mesh, &lattice);
             for _ in 0..opts.local_refinement {
                 if opts.goals.missed(&best) == 0 {
                     break;
                 }
-                boxes.extend(far_boxes(&from, &fr, &lattice.vol, REFINE_FAR_SHARE));
+                boxes.extend(far_boxes(&from, &fr, &lattice, REFINE_FAR_SHARE));
                 // boxes near one another as one: no cell between two, so the
                 // closure of the marks does not spread (refine::merge_boxes)
                 boxes = super::refine::merge_boxes(&boxes);
@@ -311,6 +329,9 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         .iter()
         .map(|&(res, elements, min, mean, hausdorff)| serde_json::json!({ "resolution": res, "elements": elements, "min_scaled_jacobian": min, "mean_scaled_jacobian": mean, "hausdorff_relative": hausdorff }))
         .collect();
+    if let Some(i) = on_faces_meshed {
+        meshed[i]["planes_on_faces"] = serde_json::json!(true);
+    }
     for (i, start, starts) in round_starts {
         meshed[i]["local_refinement_start"] = start;
         meshed[i]["local_refinement_starts"] = serde_json::Value::Array(starts);
@@ -397,7 +418,10 @@ fn next_resolution(last: LastLattice, best_res: usize, goal: f64) -> usize {
 /// added and the least solid fraction they have.
 #[derive(Clone)]
 struct Lattice {
+    /// The voxels on the uniform lattice `vol.lo + i * vol.h` of the warped surface
+    /// (the surface itself when `planes` is uniform).
     vol: crate::context::volume::VoxelVolume,
+    planes: LatticePlanes,
     filled: usize,
     thin_wall: Option<(usize, f32)>,
 }
@@ -405,16 +429,19 @@ struct Lattice {
 /// A voxel lattice of the working-frame surface at `res` voxels along the longest
 /// edge, made well-composed: Some when it has the input's topology within the
 /// element budget. The bool says whether a finer lattice could still fit the budget.
-fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<Lattice>, bool)> {
-    let mut vol = voxelize(mesh, res)?;
+fn topology_lattice(mesh: &TriMesh, res: usize, on_faces: bool, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<Lattice>, bool)> {
+    let planes = if on_faces { LatticePlanes::aligned(mesh, res, opts.lattice_planes) } else { LatticePlanes::uniform(mesh, res) };
+    let lm = planes.warped(mesh);
+    let label = if planes.is_uniform() { res.to_string() } else { format!("{res} (planes on faces)") };
+    let mut vol = crate::context::volume::VoxelVolume { lo: planes.lo, h: planes.h, grid: crate::context::volume::voxelize_on(&lm, planes.lo, planes.h, planes.dims()) };
     let centre_occ = vol.grid.occ.clone();
     let filled = make_well_composed(&mut vol.grid);
     let (b0, b2, b1) = betti(&vol.grid);
     let n = vol.grid.count();
-    tried.push(format!("{res}: {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
+    tried.push(format!("{label}: {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
     let fits = n * 8 <= opts.max_elements;
     if b0 == 1 && b2 == 0 && b1 == genus && n <= opts.max_elements {
-        return Ok((Some(Lattice { vol, filled, thin_wall: None }), fits));
+        return Ok((Some(Lattice { vol, planes, filled, thin_wall: None }), fits));
     }
     if b0 == 1 && b2 == 0 && b1 > genus {
         // One piece with extra tunnels: a wall thinner than a voxel passes between
@@ -425,7 +452,7 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
         // surface) until the topology is the input's. A solid in pieces
         // (trimesh_round's tube wall below 188 voxels) is too coarse as a whole:
         // filling would make a wall of squeezed one-voxel elements; it is refined.
-        let frac = crate::context::volume::solid_fractions(mesh, &vol, 4);
+        let frac = crate::context::volume::solid_fractions(&lm, &vol, 4);
         let centre_count = centre_occ.iter().filter(|&&o| o).count();
         for tau in [0.375f32, 0.25, 0.125] {
             let mut g = VoxelGrid { dims: vol.grid.dims, occ: centre_occ.iter().zip(&frac).map(|(&o, &f)| o || f >= tau).collect() };
@@ -433,10 +460,10 @@ fn topology_lattice(mesh: &TriMesh, res: usize, genus: i64, opts: &HexOptions, t
             let f2 = make_well_composed(&mut g);
             let (b0, b2, b1) = betti(&g);
             let n = g.count();
-            tried.push(format!("{res} with voxels >= {tau} solid (+{added}): {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
+            tried.push(format!("{label} with voxels >= {tau} solid (+{added}): {n} voxels, {b0} component(s), {b2} cavit(ies), genus {b1}"));
             if b0 == 1 && b2 == 0 && b1 == genus && n <= opts.max_elements {
                 vol.grid = g;
-                return Ok((Some(Lattice { vol, filled: f2, thin_wall: Some((added, tau)) }), n * 8 <= opts.max_elements));
+                return Ok((Some(Lattice { vol, planes, filled: f2, thin_wall: Some((added, tau)) }), n * 8 <= opts.max_elements));
             }
         }
     }
@@ -454,7 +481,7 @@ const REFINE_FAR_SHARE: f64 = 0.8;
 /// Boxes of lattice nodes around the points where `mesh` (user coordinates) is
 /// farthest from the input: input vertices and boundary nodes at least `frac` times
 /// the largest such distance away, each the voxel it lies in, within the lattice.
-fn far_boxes(mesh: &HexMesh, fr: &super::pipeline::Frames, vol: &crate::context::volume::VoxelVolume, frac: f64) -> Vec<([u32; 3], [u32; 3])> {
+fn far_boxes(mesh: &HexMesh, fr: &super::pipeline::Frames, lattice: &Lattice, frac: f64) -> Vec<([u32; 3], [u32; 3])> {
     let Some(u_to_w) = fr.w_to_u.inverse() else { return Vec::new() };
     let hw = HexMesh { nodes: mesh.nodes.iter().map(|&p| u_to_w.apply(p)).collect(), elements: mesh.elements.clone() };
     let hb = super::distance::boundary_trimesh(&hw);
@@ -466,11 +493,11 @@ fn far_boxes(mesh: &HexMesh, fr: &super::pipeline::Frames, vol: &crate::context:
     if !(dmax > 0.0) {
         return Vec::new();
     }
-    let dims = vol.grid.dims;
+    let dims = lattice.vol.grid.dims;
     pts.iter()
         .filter(|p| p.1 >= frac * dmax)
         .map(|(p, _)| {
-            let c: [f64; 3] = std::array::from_fn(|a| (p[a] - vol.lo[a]) / vol.h);
+            let c = lattice.planes.to_lattice(*p);
             (
                 std::array::from_fn(|a| c[a].floor().clamp(0.0, dims[a] as f64 - 1.0) as u32),
                 std::array::from_fn(|a| (c[a].floor() + 1.0).clamp(1.0, dims[a] as f64) as u32),
@@ -494,8 +521,9 @@ struct Carved {
 
 /// The voxels of `mesh` on `vol`'s lattice split 3 x 3 x 3 (the same for every
 /// round of local refinement).
-fn fine_voxels(mesh: &TriMesh, vol: &crate::context::volume::VoxelVolume) -> VoxelGrid {
-    crate::context::volume::voxelize_on(mesh, vol.lo, vol.h / 3.0, vol.grid.dims.map(|d| 3 * d))
+fn fine_voxels(mesh: &TriMesh, lattice: &Lattice) -> VoxelGrid {
+    let vol = &lattice.vol;
+    crate::context::volume::voxelize_on(&lattice.planes.warped(mesh), vol.lo, vol.h / 3.0, vol.grid.dims.map(|d| 3 * d))
 }
 
 /// Local refinement with re-voxelisation: the lattice's voxels in `boxes` (boxes of
@@ -690,7 +718,7 @@ enum Start<'a> {
 /// those boxes split (local refinement): boundary nodes onto the surface, then
 /// the usual quality steps ([`finish`]).
 fn mesh_lattice(
-    Lattice { vol, filled, thin_wall }: Lattice,
+    Lattice { vol, planes, filled, thin_wall }: Lattice,
     res: usize,
     refine: Option<(&[([u32; 3], [u32; 3])], Start)>,
     fr: &super::pipeline::Frames,
@@ -703,14 +731,15 @@ fn mesh_lattice(
     let t0 = Instant::now();
     let h = lattice_hex(&vol.grid, 0);
     // lattice coordinates -> the voxel lattice's corners in W
-    let pos: Vec<[f64; 3]> = h.node_lattice.iter().map(|c| std::array::from_fn(|a| vol.lo[a] + c[a] as f64 * vol.h)).collect();
+    let pos: Vec<[f64; 3]> = h.node_lattice.iter().map(|c| planes.to_world(c.map(|x| x as f64))).collect();
     let masks = map::normal_masks(&h);
     let role: Vec<Role> = masks.iter().map(|&m| if m != 0 { Role::Free } else { Role::Interior }).collect();
     let bquads: Vec<[u32; 4]> = map::boundary_faces_lattice(&h).into_iter().map(|(q, _)| q).collect();
     let coarse = HexMesh { nodes: pos, elements: h.mesh.elements.clone() };
     // the lattice fitted to the surface (not needed when a refined lattice starts
     // on the lattice; the same for every round of local refinement, so cached)
-    let fit = || fitted_work(coarse, role, &bquads, vec![[vol.h; 3]; h.mesh.elements.len()], sw, opts);
+    let sizes: Vec<[f64; 3]> = h.elem_lattice.iter().map(|&c| planes.voxel_size(c)).collect();
+    let fit = || fitted_work(coarse, role, &bquads, sizes, sw, opts);
     let (fitted, refine) = match refine {
         None => (Some(fit()), None),
         Some((boxes, Start::Fitted(cache))) => (Some(cache.get_or_insert_with(fit).clone()), Some((boxes, None))),
@@ -761,14 +790,14 @@ fn mesh_lattice(
                 }
                 (from_fit, fit_stats)
             }
-            None => (r.nodes.iter().map(|x| std::array::from_fn(|a| vol.lo[a] + x[a] * vol.h)).collect(), Vec::new()),
+            None => (r.nodes.iter().map(|&x| planes.to_world(x)).collect(), Vec::new()),
         };
         // target boxes: each element's shape on the lattice
         let targets: Vec<[f64; 3]> = r
             .elements
             .iter()
             .map(|el| {
-                let d = |k: usize| norm(sub(r.nodes[el[k] as usize], r.nodes[el[0] as usize])) * vol.h;
+                let d = |k: usize| norm(sub(planes.to_world(r.nodes[el[k] as usize]), planes.to_world(r.nodes[el[0] as usize])));
                 [d(1), d(3), d(4)]
             })
             .collect();
@@ -811,6 +840,10 @@ fn mesh_lattice(
     let mut details = serde_json::json!({ "voxel_resolution": res, "voxel_size": vol.h / fr.sw_scale, "voxels_filled_for_manifold": filled, "fit": fit_stats, "feature_nodes_held": held });
     if !refined.is_null() {
         details["local_refinement"] = refined;
+    }
+    if !planes.is_uniform() {
+        // the lattice planes moved onto the input's faces, per axis (HexOptions::lattice_planes)
+        details["planes_on_faces"] = serde_json::json!(planes.aligned.iter().map(Vec::len).collect::<Vec<_>>());
     }
     if let Some((added, tau)) = thin_wall {
         // the lattice was repaired for a porous thin wall (topology_lattice)
@@ -1028,13 +1061,13 @@ mod tests {
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let opts = HexOptions { voxel_refinements: 0, ..Default::default() };
         let mut tried = Vec::new();
-        let (lattice, _) = topology_lattice(&mesh, 24, 1, &opts, &mut tried).unwrap();
+        let (lattice, _) = topology_lattice(&mesh, 24, false, 1, &opts, &mut tried).unwrap();
         let Lattice { vol, thin_wall, .. } = lattice.expect("a lattice of genus 1");
         assert!(thin_wall.is_some_and(|(n, tau)| n > 0 && tau > 0.0), "{tried:?}");
         assert_eq!(betti(&vol.grid), (1, 0, 1), "{tried:?}");
         assert!(tried[0].ends_with("genus 2") && tried.iter().any(|t| t.contains("solid (+")), "{tried:?}");
         // every voxel whose centre is inside is kept
-        let centre = voxelize(&mesh, 24).unwrap();
+        let centre = crate::context::volume::voxelize(&mesh, 24).unwrap();
         assert!(centre.grid.occ.iter().zip(&vol.grid.occ).all(|(&c, &o)| o || !c));
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 1, &opts, &mut crate::error::NoProgress).unwrap();
         assert_eq!(r.domain, "voxel 24");
@@ -1043,6 +1076,37 @@ mod tests {
         // the report says so
         let d = &r.stages[0].details["voxels_added_for_thin_walls"];
         assert!(d["voxels"].as_u64().unwrap() > 0 && d["min_solid_fraction"].as_f64().unwrap() > 0.0, "{d}");
+    }
+
+    #[test]
+    fn planes_on_the_faces_mesh_a_block_part_on_its_faces() {
+        // an L of three cube cells squeezed to 0.83 in x and 0.55 in z: the
+        // uniform lattice of 10 voxels along its longest edge (y) puts no plane
+        // on its faces across x and z; with the planes on the faces every voxel
+        // face lies on a plane of the part and the lattice is the part
+        let mut m = crate::polycube::boundary(&crate::context::Context::parse("cube,cube,0,cube,0,0,0,0,0,0,0,0").unwrap().assemble()).to_trimesh();
+        for v in &mut m.vertices {
+            v[0] *= 0.83;
+            v[2] *= 0.55;
+        }
+        let opts = HexOptions { voxel_resolution: 10, voxel_refinements: 0, lattice_planes: 0.02, ..Default::default() };
+        let r = build_voxel_hex_mesh(&m, &Affine::similarity(1.0, [0.0; 3]), 0, &opts, &mut crate::error::NoProgress).unwrap();
+        let d = &r.stages[0].details;
+        let meshed = d["lattices_meshed"].as_array().unwrap();
+        assert_eq!(meshed.len(), 2, "{meshed:?}");
+        assert_eq!(meshed[1]["planes_on_faces"], serde_json::json!(true), "{meshed:?}");
+        assert_eq!(d["planes_on_faces"], serde_json::json!([3, 3, 2]), "{d}");
+        // the uniform lattice's mesh is pulled onto the faces by the fit; the one
+        // on the faces needs no pull: every element a box, the boundary on the part
+        let uniform = meshed[0]["min_scaled_jacobian"].as_f64().unwrap();
+        assert!(r.quality.min > 1.0 - 1e-9 && r.quality.min > uniform, "{:?} vs {uniform}", r.quality);
+        assert!(r.hausdorff_relative < 1e-9, "{}", r.hausdorff_relative);
+        let v = m.signed_volume();
+        assert!((r.volume - v).abs() < 1e-9 * v, "{} vs {v}", r.volume);
+        // the same lattice as the uniform one when the option is off
+        let off = build_voxel_hex_mesh(&m, &Affine::similarity(1.0, [0.0; 3]), 0, &HexOptions { lattice_planes: 0.0, ..opts.clone() }, &mut crate::error::NoProgress).unwrap();
+        assert_eq!(off.stages[0].details["lattices_meshed"].as_array().unwrap().len(), 1);
+        assert_eq!(off.quality.min, uniform);
     }
 
     #[test]
@@ -1167,12 +1231,13 @@ mod tests {
         assert!(r.quality.min > 1.0 - 1e-9, "{:?}", r.quality);
         assert!(r.hausdorff_relative < 1e-9, "{}", r.hausdorff_relative);
         assert!((r.volume - torus.signed_volume()).abs() < 1e-9);
-        // at 25 voxels the unit faces fall between lattice planes (z: 9 voxels
-        // centred on a height of 8.33): no corner on a node, nothing held, and the
-        // usual fit still gives a valid mesh of genus one (one lattice: with the
-        // default refinements the fallback goes on for the 1 % goal, a minute and a
-        // half; the lattice loop has tests of its own)
-        let r = build_voxel_hex_mesh(&torus, &Affine::similarity(1.0, [0.0; 3]), 1, &one(25), &mut crate::error::NoProgress).unwrap();
+        // at 25 voxels the unit faces fall between the uniform lattice's planes
+        // (z: 9 voxels centred on a height of 8.33): no corner on a node, nothing
+        // held, and the usual fit still gives a valid mesh of genus one (one
+        // lattice: with the default refinements the fallback goes on for the 1 %
+        // goal, a minute and a half; the lattice loop has tests of its own)
+        let uniform = HexOptions { lattice_planes: 0.0, ..one(25) };
+        let r = build_voxel_hex_mesh(&torus, &Affine::similarity(1.0, [0.0; 3]), 1, &uniform, &mut crate::error::NoProgress).unwrap();
         assert_eq!(r.stages[0].details["feature_nodes_held"], 0);
         assert_eq!(r.quality.inverted, 0, "{:?}", r.quality);
         assert!(r.quality.min > 0.2, "{:?}", r.quality);
@@ -1181,6 +1246,15 @@ mod tests {
         assert!((r.volume - v).abs() < 0.03 * v, "{} vs {v}", r.volume);
         // genus one: the boundary quads' Euler characteristic V - E + F is 2 - 2g = 0
         assert_eq!(boundary_edges_and_euler(&r.mesh).1, 0);
+        // with the planes on the faces (the default) the 25-voxel lattice is the
+        // input again: every face on a plane (8 voxels of 1/8 between faces 1
+        // apart, where the uniform size is 3/25), every corner on a node, the
+        // exact mesh kept
+        let r = build_voxel_hex_mesh(&torus, &Affine::similarity(1.0, [0.0; 3]), 1, &one(25), &mut crate::error::NoProgress).unwrap();
+        let d = &r.stages[0].details;
+        assert_eq!(d["planes_on_faces"], serde_json::json!([4, 4, 2]), "{d}");
+        assert!(d["feature_nodes_held"].as_u64().unwrap() > 16, "{d}");
+        assert!(r.quality.min > 1.0 - 1e-9 && r.hausdorff_relative < 1e-9, "{:?} {}", r.quality, r.hausdorff_relative);
     }
 
     #[test]
@@ -1196,7 +1270,8 @@ mod tests {
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
         assert_eq!(HexOptions::default().local_refinement, 0, "off by default");
-        let opts = HexOptions { voxel_refinements: 0, pin_uncovered: 0.6, local_refinement: 3, ..Default::default() };
+        // (the uniform lattice: the one these figures were measured on)
+        let opts = HexOptions { voxel_refinements: 0, pin_uncovered: 0.6, local_refinement: 3, lattice_planes: 0.0, ..Default::default() };
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut crate::error::NoProgress).unwrap();
         let d = &r.stages[0].details;
         let meshed = d["lattices_meshed"].as_array().unwrap();
@@ -1233,13 +1308,14 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
-        let mut vol = voxelize(&mesh, 24).unwrap();
+        let mut vol = crate::context::volume::voxelize(&mesh, 24).unwrap();
         make_well_composed(&mut vol.grid);
         assert_eq!(betti(&vol.grid), (1, 0, genus));
         let cell = |p: [f64; 3]| -> [u32; 3] { std::array::from_fn(|a| ((p[a] - vol.lo[a]) / vol.h).floor() as u32) };
         let (a, b) = (cell([16.46, 0.718, 4.13]), cell([16.46, 2.674, 4.127]));
         let boxes = super::super::refine::merge_boxes(&[(a, a.map(|c| c + 1)), (b, b.map(|c| c + 1))]);
-        let c = carve_refined(&vol, &boxes, &fine_voxels(&mesh, &vol), genus).unwrap();
+        let lattice = Lattice { planes: LatticePlanes::uniform(&mesh, 24), vol: vol.clone(), filled: 0, thin_wall: None };
+        let c = carve_refined(&vol, &boxes, &fine_voxels(&mesh, &lattice), genus).unwrap();
         let r = &c.refined;
         assert!(r.split > 0 && r.transitions > 0 && c.fine_removed > 0, "{} {} {}", r.split, r.transitions, c.fine_removed);
         // the solid is the coarse voxels and the split voxels' kept fine voxels
