@@ -70,6 +70,14 @@ fn ray_hits(mesh: &TriMesh, bvh: &Bvh, axis: usize, o: [f64; 3], lo: f64, hi: f6
 /// Fill the aligned surface on a lattice with `resolution` voxels along its longest
 /// bounding-box edge.
 pub fn voxelize(mesh: &TriMesh, resolution: usize) -> Result<VoxelVolume> {
+    let (lo, h, dims) = uniform_lattice(mesh, resolution)?;
+    Ok(VoxelVolume { lo, h, grid: voxelize_on(mesh, lo, h, dims) })
+}
+
+/// The lattice [`voxelize`] fills: `resolution` (clamped to 4..=512) voxels of
+/// size `h` along the longest bounding-box edge, centred on the box; its first
+/// corner, voxel size and voxel counts.
+pub fn uniform_lattice(mesh: &TriMesh, resolution: usize) -> Result<([f64; 3], f64, [usize; 3])> {
     let resolution = resolution.clamp(4, 512);
     let bb = Aabb::of_points(&mesh.vertices);
     let size = bb.size();
@@ -80,7 +88,7 @@ pub fn voxelize(mesh: &TriMesh, resolution: usize) -> Result<VoxelVolume> {
     let h = longest / resolution as f64;
     let dims: [usize; 3] = std::array::from_fn(|a| ((size[a] / h).ceil() as usize).max(1));
     let lo: [f64; 3] = std::array::from_fn(|a| bb.centre()[a] - dims[a] as f64 * h / 2.0);
-    Ok(VoxelVolume { lo, h, grid: voxelize_on(mesh, lo, h, dims) })
+    Ok((lo, h, dims))
 }
 
 /// Fill the aligned surface on the lattice of `dims` voxels of size `h` from `lo`

@@ -12,6 +12,7 @@
 //! surface exactly when its image is inside the image of the surface): the
 //! uniform voxeliser runs unchanged on the warped surface.
 
+use crate::error::Result;
 use crate::geometry::Aabb;
 use crate::mesh::TriMesh;
 use std::borrow::Cow;
@@ -87,26 +88,20 @@ pub fn axis_planes(mesh: &TriMesh) -> (Vec<AxisPlane>, f64) {
 impl LatticePlanes {
     /// The uniform lattice of `crate::context::volume::voxelize`: `resolution`
     /// voxels along the longest edge, centred on the bounding box.
-    pub fn uniform(mesh: &TriMesh, resolution: usize) -> LatticePlanes {
-        let bb = Aabb::of_points(&mesh.vertices);
-        let size = bb.size();
-        let h = size[0].max(size[1]).max(size[2]) / resolution.clamp(4, 512) as f64;
-        let planes: [Vec<f64>; 3] = std::array::from_fn(|a| {
-            let dims = ((size[a] / h).ceil() as usize).max(1);
-            let lo = bb.centre()[a] - dims as f64 * h / 2.0;
-            (0..=dims).map(|i| lo + i as f64 * h).collect()
-        });
-        LatticePlanes { lo: std::array::from_fn(|a| planes[a][0]), planes, h, aligned: Default::default() }
+    pub fn uniform(mesh: &TriMesh, resolution: usize) -> Result<LatticePlanes> {
+        let (lo, h, dims) = crate::context::volume::uniform_lattice(mesh, resolution)?;
+        let planes: [Vec<f64>; 3] = std::array::from_fn(|a| (0..=dims[a]).map(|i| lo[a] + i as f64 * h).collect());
+        Ok(LatticePlanes { lo, planes, h, aligned: Default::default() })
     }
 
     /// The lattice of the same voxel size with planes on the input's axis-parallel
     /// planar faces of at least `min_share` of its area (largest first; one closer
     /// than half a voxel to a plane already taken is skipped). Uniform when there
     /// is none.
-    pub fn aligned(mesh: &TriMesh, resolution: usize, min_share: f64) -> LatticePlanes {
-        let uniform = Self::uniform(mesh, resolution);
+    pub fn aligned(mesh: &TriMesh, resolution: usize, min_share: f64) -> Result<LatticePlanes> {
+        let uniform = Self::uniform(mesh, resolution)?;
         if !(min_share > 0.0) {
-            return uniform;
+            return Ok(uniform);
         }
         let bb = Aabb::of_points(&mesh.vertices);
         let h = uniform.h;
@@ -149,10 +144,10 @@ impl LatticePlanes {
             below.extend(v);
             below
         });
-        LatticePlanes { lo: std::array::from_fn(|a| planes[a][0]), planes, h, aligned: anchors.map(|mut v| {
+        Ok(LatticePlanes { lo: std::array::from_fn(|a| planes[a][0]), planes, h, aligned: anchors.map(|mut v| {
             v.sort_by(f64::total_cmp);
             v
-        }) }
+        }) })
     }
 
     pub fn dims(&self) -> [usize; 3] {
@@ -218,7 +213,7 @@ mod tests {
     #[test]
     fn the_uniform_planes_are_the_voxelisers() {
         let b = crate::hex::surface::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
-        let l = LatticePlanes::uniform(&b, 10);
+        let l = LatticePlanes::uniform(&b, 10).unwrap();
         let v = crate::context::volume::voxelize(&b, 10).unwrap();
         assert_eq!(l.dims(), v.grid.dims);
         assert_eq!(l.lo, v.lo);
@@ -232,7 +227,7 @@ mod tests {
         // a box of 1 x 1 x 0.55 at 10 voxels: uniform planes at -0.025 + 0.1 i in z
         // miss its top and bottom; aligned, z has 6 voxels of 0.55 / 6 from 0
         let b = crate::hex::surface::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
-        let l = LatticePlanes::aligned(&b, 10, 0.05);
+        let l = LatticePlanes::aligned(&b, 10, 0.05).unwrap();
         assert_eq!(l.aligned, [vec![0.0, 1.0], vec![0.0, 1.0], vec![0.0, 0.55]]);
         assert_eq!(l.dims(), [10, 10, 6]);
         assert!((l.planes[2][6] - 0.55).abs() < 1e-15 && l.planes[2][0] == 0.0);

@@ -156,7 +156,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     let mut tried = Vec::new();
     let mut res = opts.voxel_resolution.clamp(2, VOXEL_MAX_RESOLUTION);
     let lattice = loop {
-        let (lattice, fits) = topology_lattice(&fr.sw.mesh, res, false, genus, opts, &mut tried)?;
+        let (lattice, fits) = topology_lattice(&fr.sw.mesh, res, None, genus, opts, &mut tried)?;
         if let Some(l) = lattice {
             break l;
         }
@@ -187,7 +187,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         // a finer lattice can cut a thin wall the coarser one kept (trimesh_round:
         // genus 1 at 96 voxels, not at 120): try further 1.25x steps within the budget
         let lattice = loop {
-            let (lattice, fits) = topology_lattice(&fr.sw.mesh, next, false, genus, opts, &mut tried)?;
+            let (lattice, fits) = topology_lattice(&fr.sw.mesh, next, None, genus, opts, &mut tried)?;
             if lattice.is_some() || !fits || next >= VOXEL_MAX_RESOLUTION {
                 break lattice;
             }
@@ -237,7 +237,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
         if !(slope.is_finite() && slope > 0.0 && predicted > b.0 && predicted * 10 <= best_res * 9) || meshed.iter().any(|m| m.0 == predicted) {
             break;
         }
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, false, genus, opts, &mut tried)?;
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, predicted, None, genus, opts, &mut tried)?;
         let Some(lattice) = lattice else { break };
         let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
         let r = mesh_lattice(lattice, predicted, None, &fr, opts, t_all, &mut sub)?;
@@ -251,10 +251,11 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     }
     // The kept lattice again with its planes moved onto the input's large
     // axis-parallel faces (HexOptions::lattice_planes), kept when it ranks better
-    let mut best_on_faces = false;
+    let mut best_planes = None;
     let mut on_faces_meshed = None;
-    if opts.lattice_planes > 0.0 && !LatticePlanes::aligned(&fr.sw.mesh, best_res, opts.lattice_planes).is_uniform() {
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, true, genus, opts, &mut tried)?;
+    let on_faces = LatticePlanes::aligned(&fr.sw.mesh, best_res, opts.lattice_planes)?;
+    if !on_faces.is_uniform() {
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, Some(on_faces.clone()), genus, opts, &mut tried)?;
         if let Some(lattice) = lattice {
             let mut sub = SubProgress { inner: progress, lo: 1.0 - share, hi: 1.0 };
             let r = mesh_lattice(lattice, best_res, None, &fr, opts, t_all, &mut sub)?;
@@ -262,7 +263,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
             on_faces_meshed = Some(meshed.len() - 1);
             if opts.goals.beats(&r, Some(&best)) {
                 best = r;
-                best_on_faces = true;
+                best_planes = Some(on_faces);
             }
         }
     }
@@ -273,7 +274,7 @@ pub fn build_voxel_hex_mesh(surface: &TriMesh, to_user: &Affine, genus: i64, opt
     // figures of every start's mesh)
     let mut round_starts: Vec<(usize, serde_json::Value, Vec<serde_json::Value>)> = Vec::new();
     if opts.local_refinement > 0 && best.hausdorff_relative > 0.0 {
-        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, best_on_faces, genus, opts, &mut tried)?;
+        let (lattice, _) = topology_lattice(&fr.sw.mesh, best_res, best_planes, genus, opts, &mut tried)?;
         if let Some(lattice) = lattice {
             let mut boxes: Vec<([u32; 3], [u32; 3])> = Vec::new();
             let mut from = best.mesh.clone();
@@ -429,8 +430,12 @@ struct Lattice {
 /// A voxel lattice of the working-frame surface at `res` voxels along the longest
 /// edge, made well-composed: Some when it has the input's topology within the
 /// element budget. The bool says whether a finer lattice could still fit the budget.
-fn topology_lattice(mesh: &TriMesh, res: usize, on_faces: bool, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<Lattice>, bool)> {
-    let planes = if on_faces { LatticePlanes::aligned(mesh, res, opts.lattice_planes) } else { LatticePlanes::uniform(mesh, res) };
+/// `planes`: the lattice's planes (None: the uniform lattice of `res`).
+fn topology_lattice(mesh: &TriMesh, res: usize, planes: Option<LatticePlanes>, genus: i64, opts: &HexOptions, tried: &mut Vec<String>) -> Result<(Option<Lattice>, bool)> {
+    let planes = match planes {
+        Some(p) => p,
+        None => LatticePlanes::uniform(mesh, res)?,
+    };
     let lm = planes.warped(mesh);
     let label = if planes.is_uniform() { res.to_string() } else { format!("{res} (planes on faces)") };
     let mut vol = crate::context::volume::VoxelVolume { lo: planes.lo, h: planes.h, grid: crate::context::volume::voxelize_on(&lm, planes.lo, planes.h, planes.dims()) };
@@ -1061,7 +1066,7 @@ mod tests {
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let opts = HexOptions { voxel_refinements: 0, ..Default::default() };
         let mut tried = Vec::new();
-        let (lattice, _) = topology_lattice(&mesh, 24, false, 1, &opts, &mut tried).unwrap();
+        let (lattice, _) = topology_lattice(&mesh, 24, None, 1, &opts, &mut tried).unwrap();
         let Lattice { vol, thin_wall, .. } = lattice.expect("a lattice of genus 1");
         assert!(thin_wall.is_some_and(|(n, tau)| n > 0 && tau > 0.0), "{tried:?}");
         assert_eq!(betti(&vol.grid), (1, 0, 1), "{tried:?}");
@@ -1314,7 +1319,7 @@ mod tests {
         let cell = |p: [f64; 3]| -> [u32; 3] { std::array::from_fn(|a| ((p[a] - vol.lo[a]) / vol.h).floor() as u32) };
         let (a, b) = (cell([16.46, 0.718, 4.13]), cell([16.46, 2.674, 4.127]));
         let boxes = super::super::refine::merge_boxes(&[(a, a.map(|c| c + 1)), (b, b.map(|c| c + 1))]);
-        let lattice = Lattice { planes: LatticePlanes::uniform(&mesh, 24), vol: vol.clone(), filled: 0, thin_wall: None };
+        let lattice = Lattice { planes: LatticePlanes::uniform(&mesh, 24).unwrap(), vol: vol.clone(), filled: 0, thin_wall: None };
         let c = carve_refined(&vol, &boxes, &fine_voxels(&mesh, &lattice), genus).unwrap();
         let r = &c.refined;
         assert!(r.split > 0 && r.transitions > 0 && c.fine_removed > 0, "{} {} {}", r.split, r.transitions, c.fine_removed);
