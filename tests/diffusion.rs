@@ -11,7 +11,7 @@ use sddpm::polycube::dataset::{item_rng, sample_cells};
 use sddpm::polycube::tensor::layout;
 
 fn tiny_config() -> TrainConfig {
-    let mut c = TrainConfig { epochs: 150, batch_size: 4, learning_rate: 5e-3, limit_samples: Some(4), log_every: 10, ..Default::default() };
+    let mut c = TrainConfig { epochs: 150, batch_size: 2, learning_rate: 5e-3, limit_samples: Some(2), log_every: 10, ..Default::default() };
     c.model.base_width = 8;
     c.model.emb_dim = 32;
     c.model.cell_dim = 4;
@@ -45,17 +45,17 @@ fn a_tiny_model_overfits_a_handful_of_samples() {
     let first = losses[0];
     let tail = &losses[losses.len() - 5..];
     let last = tail.iter().sum::<f64>() / tail.len() as f64;
-    // 300 steps on one batch of 4: the noise-prediction loss of a fresh network is
-    // about 1 (it predicts unit-variance noise from scratch). Four samples with
+    // 300 steps on one batch of 2: the noise-prediction loss of a fresh network is
+    // about 1 (it predicts unit-variance noise from scratch). Two samples with
     // distinct contexts can be memorised, after which the noise is recoverable from
     // x_t at most timesteps, so the loss must fall well below. Each logged value is
     // the mean of 10 steps with random timesteps, whose spread is large (the
     // per-timestep error ranges from ~0.001 at t = 500 to ~0.6 at t = 2, see
     // BENCHMARKS.md); the mean of the last five logged windows (50 steps) is compared,
-    // and a factor of 3 below the fresh network is required. (At 150 steps the
-    // ratio was 3.0-3.3: the trajectory differs when other tests run alongside,
-    // first window 0.840 / 0.887 / 0.902 measured, and one CI run missed by 0.2 %;
-    // at 300 steps it is 4.6.)
+    // and a factor of 3 below the fresh network is required: 4.8 measured with the
+    // other tests of this file alongside, 5.1 alone (the trajectory depends on the
+    // threads the kernels get). Until the thirty-second session a batch of 4 (4.6),
+    // at 2.5x the time.
     assert!(last < first / 3.0, "loss {first} -> {last} (mean of the last 5 windows)");
 }
 

@@ -141,6 +141,9 @@ fn every_status_is_produced() {
     let rod = load("hexgen_rod.obj");
     let mut ro = RunOptions { polycube: fast.clone(), require_valid_hex: true, accept_unverified: true, spline: None, hex_candidates: 1, ..Default::default() };
     ro.hex.level = Some(1);
+    // the polycube's mesh alone: the grid-based fallback (a minute and more on the
+    // rod, with tests of its own) would stand in for it
+    ro.hex.voxel_fallback = false;
     let two = Context::parse("THC+Y,THC+Y,0,0,0,0,0,0,0,0,0,0").unwrap();
     let r = run(&model, &rod, 2, &ContextRequest::Contexts(vec![two]), &ro, &mut NoProgress);
     let (st, msg) = status_of(r);
