@@ -277,8 +277,10 @@ fn voxel_fallback_refines_its_lattice_until_the_goals_are_met() {
     // meet every goal with room (0.66 %), the lattice predicted from the two (38
     // voxels, 0.57 %) has room again, the next one predicted from 24 and 38 (32
     // voxels) misses the goal (1.13 %) and the one between (34, 0.53 %) is kept:
-    // 2,935 elements where the first prediction alone kept 3,752 (BENCHMARKS.md
-    // "Coarser lattices while the kept one has room", "Boundary mean ascent")
+    // 2,935 elements where the first prediction alone kept 3,752, and 2,692 on
+    // its lattice with the planes on the rod's faces (BENCHMARKS.md "Coarser
+    // lattices while the kept one has room", "Boundary mean ascent", "Lattice
+    // planes on the faces")
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     let mesh = TriMesh::load(dir.join("hexgen_rod.obj"), &LoadOptions::default()).unwrap();
     let frame = Affine::similarity(1.0, [0.0; 3]);
