@@ -26,7 +26,8 @@ fn tiny_config() -> TrainConfig {
 fn tiny_model() -> Model {
     static WEIGHTS: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
     let bytes = WEIGHTS.get_or_init(|| {
-        let out = tempdir("tiny").join("tiny.sddpmw");
+        let dir = tempdir("tiny");
+        let out = dir.path().join("tiny.sddpmw");
         train(&tiny_config(), &out, None, &mut |_| true).unwrap();
         std::fs::read(&out).unwrap()
     });
@@ -36,7 +37,7 @@ fn tiny_model() -> Model {
 #[test]
 fn a_tiny_model_overfits_a_handful_of_samples() {
     let dir = tempdir("overfit");
-    let out = dir.join("tiny.sddpmw");
+    let out = dir.path().join("tiny.sddpmw");
     let cfg = TrainConfig { epochs: 300, ..tiny_config() };
     train(&cfg, &out, None, &mut |_| true).unwrap();
     let log = read_loss_csv(&sddpm::diffusion::train::checkpoint_dir_for(&out).join("loss.csv")).unwrap();
@@ -227,11 +228,9 @@ fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
     a.iter().zip(b).map(|(p, q)| (p - q).abs()).fold(0.0f32, f32::max)
 }
 
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("sddpm-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A directory of the test's own, removed with everything in it when dropped.
+fn tempdir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(&format!("sddpm-test-{name}-")).tempdir().unwrap()
 }
 
 #[test]

@@ -8,11 +8,11 @@ use sddpm::export::spline_vtk::{spline_vtk_string, write_control_mesh_vtk, write
 use sddpm::export::vtk::parse_vtk_legacy;
 use sddpm::spline::{build_spline, meshes, Spline, SplineOptions};
 use std::path::PathBuf;
+use tempfile::TempDir;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sddpm_spline_export_{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+/// A directory of the test's own, removed with everything in it when the test ends.
+fn tmpdir() -> TempDir {
+    tempfile::Builder::new().prefix("sddpm_spline_export_").tempdir().unwrap()
 }
 
 fn refined_spline() -> Spline {
@@ -25,8 +25,9 @@ fn refined_spline() -> Spline {
 #[test]
 fn spline_bext_round_trip_dense_and_sparse() {
     let sp = refined_spline();
+    let d = tmpdir();
     for sparse in [false, true] {
-        let path = tmp(if sparse { "s.bext" } else { "d.bext" });
+        let path = d.path().join(if sparse { "s.bext" } else { "d.bext" });
         write_bext(&path, &sp, sparse).unwrap();
         let b = read_bext(&path).unwrap();
         assert_eq!(b.nodes.len(), sp.num_basis());
@@ -69,10 +70,11 @@ fn spline_bext_rejects_malformed() {
     ] {
         assert!(parse_bext(&bad).is_err());
     }
-    let e = read_bext(&tmp("does_not_exist.bext")).unwrap_err();
+    let d = tmpdir();
+    let e = read_bext(&d.path().join("does_not_exist.bext")).unwrap_err();
     assert_eq!(e.status(), sddpm::Status::Io);
-    std::fs::write(tmp("bad.bext"), "B E X T\nnodeN x\n").unwrap();
-    assert_eq!(read_bext(&tmp("bad.bext")).unwrap_err().status(), sddpm::Status::Parse);
+    std::fs::write(d.path().join("bad.bext"), "B E X T\nnodeN x\n").unwrap();
+    assert_eq!(read_bext(&d.path().join("bad.bext")).unwrap_err().status(), sddpm::Status::Parse);
     let _ = Bext::default();
 }
 
@@ -176,7 +178,8 @@ fn spline_lsdyna_deck_matches_manual_layout() {
     let reference: Vec<String> = parse_deck(&std::fs::read_to_string(p).unwrap()).into_iter().map(|k| k.name).collect();
     assert_eq!(names, reference);
     // file output, odd numbers still fit their fields, bad options refused
-    let path = tmp("model.k");
+    let d = tmpdir();
+    let path = d.path().join("model.k");
     let odd = DeckOptions { density: 1.234567891e-9, youngs_modulus: 123456789.0, poisson_ratio: 0.33333333, ..Default::default() };
     write_iga_deck(&path, "spline.bext", &odd).unwrap();
     let v = check_deck(&std::fs::read_to_string(&path).unwrap());
@@ -203,16 +206,18 @@ fn spline_vtk_exports() {
         assert!((m.nodes[0][i] - x[i]).abs() < 1e-12);
     }
     assert!(spline_vtk_string(&sp, 0).is_err());
-    write_control_mesh_vtk(&tmp("control.vtk"), &sp).unwrap();
-    let c = sddpm::export::vtk::read_vtk_legacy(&tmp("control.vtk")).unwrap();
+    let d = tmpdir();
+    write_control_mesh_vtk(&d.path().join("control.vtk"), &sp).unwrap();
+    let c = sddpm::export::vtk::read_vtk_legacy(&d.path().join("control.vtk")).unwrap();
     assert_eq!(c.elements.len(), sp.topology().ne);
-    write_control_points_vtk(&tmp("points.vtk"), &sp).unwrap();
+    write_control_points_vtk(&d.path().join("points.vtk"), &sp).unwrap();
 }
 
 #[test]
 fn spline_write_outputs_for_the_pipeline() {
     let sp = refined_spline();
-    let dir = tmp("run");
+    let d = tmpdir();
+    let dir = d.path().join("run");
     let j = sddpm::spline::write_outputs(&dir, &sp, &Default::default()).unwrap();
     for k in ["elements", "basis_functions", "bext", "lsdyna", "min_scaled_jacobian"] {
         assert!(j.get(k).is_some(), "{k}");
@@ -225,5 +230,4 @@ fn spline_write_outputs_for_the_pipeline() {
     let deck = std::fs::read_to_string(dir.join("model.k")).unwrap();
     assert!(deck.contains("\nspline.bext\n"));
     assert!(dir.join("spline.vtk").exists() && dir.join("spline_control.vtk").exists());
-    std::fs::remove_dir_all(&dir).ok();
 }
