@@ -1089,10 +1089,12 @@ pub(crate) fn finish(
         };
         guarded_fit_step(&mut work, sw, opts, "boundary ascent", keep, &mut stages, |w, _| {
             let m = summary(&w.mesh).min;
+            let released = optimize::release_pins(w, sw);
             let st = optimize::boundary_mean_ascent(w, sw, passes, m, pass_reporter(progress, 0.958, 0.002, passes, &mut cancelled));
             let mut details = serde_json::to_value(st).unwrap_or_default();
             if let Some(d) = details.as_object_mut() {
                 d.insert("mean_after_ascent".into(), serde_json::json!(summary(&w.mesh).mean));
+                d.insert("pins_released".into(), serde_json::json!(released));
             }
             (true, st.moves_accepted > 0, details)
         });
