@@ -1240,6 +1240,7 @@ mod tests {
     }
 
     #[test]
+    #[ignore = "long (2.5 minutes: the rod meshed ten times, three rounds of an option that is off by default; one round runs in tests/cli.rs run_takes_the_fallback_options); the README's long tests"]
     fn local_refinement_brings_the_rod_closer_with_a_valid_conforming_mesh() {
         // hexgen_rod at 24 voxels misses its input by 2.09 %; three rounds that
         // split the voxels where it is farthest bring it within the distance goal
