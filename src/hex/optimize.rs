@@ -872,11 +872,13 @@ pub fn boundary_mean_ascent(w: &mut Work, sw: &Surface, passes: usize, floor: f6
 
 /// The nodes the coverage step pinned to input vertices ([`cover_uncovered_vertices`]:
 /// `Role::Corner` at a vertex that is no feature corner) slide on the surface again
-/// from their pins, as free nodes; the pipeline calls it before the boundary mean
-/// ascent, whose fit guard keeps what the pins were for, the vertices they reached staying near the boundary, and
-/// the pins no longer hold their elements (hexgen_hepta at 12 voxels with the
-/// coverage step at 0.6: mean 0.877 -> 0.886, 1.50 -> 1.42 %; BENCHMARKS.md "At
-/// HexGen's element counts"). Feature corners stay fixed. Returns how many.
+/// from their pins, as free nodes. The pipeline calls it before the boundary mean
+/// ascent, whose fit guard keeps what the pins were for (the vertices they reached
+/// stay near the boundary) while the pins no longer hold their elements
+/// (hexgen_hepta at 12 voxels with the coverage step at 0.6: mean 0.877 -> 0.886,
+/// 1.50 -> 1.42 %; BENCHMARKS.md "At HexGen's element counts"). Feature corners
+/// (the polycube map's and the sheets' corner nodes among them) stay fixed.
+/// Returns how many were released.
 pub fn release_pins(w: &mut Work, sw: &Surface) -> usize {
     let corners: std::collections::HashSet<u32> = sw.features.corners.iter().copied().collect();
     let mut released = 0;
