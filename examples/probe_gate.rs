@@ -34,7 +34,7 @@ fn main() {
             sch.forward_sample(x0, &z, t, &mut xt);
             let xt_t = Tensor::<4>::from_data(TensorData::new(xt.clone(), [1, 3, TENSOR_H, TENSOR_W]), &model.device);
             let c = Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &model.device);
-            let out: Vec<f32> = model.net.forward(xt_t, &[t], c).into_data().try_into_vec::<f32>().unwrap();
+            let out: Vec<f32> = model.forward(xt_t, &[t], c).into_data().try_into_vec::<f32>().unwrap();
             let prior = prior_image(&ctx.one_hot());
             for cell in 0..NUM_CELLS {
                 if ctx.labels[cell] == Primitive::Null {

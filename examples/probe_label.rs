@@ -49,7 +49,7 @@ fn main() {
         sched.forward_sample(&x0, &z, t, &mut xt);
         let run = |c: &Context| -> Vec<f32> {
             let ct = Tensor::<2>::from_data(TensorData::new(c.one_hot().to_vec(), [1, 132]), &model.device);
-            model.net.forward(Tensor::<4>::from_data(TensorData::new(xt.clone(), [1, 3, TENSOR_H, TENSOR_W]), &model.device), &[t], ct).into_data().try_into_vec().unwrap()
+            model.forward(Tensor::<4>::from_data(TensorData::new(xt.clone(), [1, 3, TENSOR_H, TENSOR_W]), &model.device), &[t], ct).into_data().try_into_vec().unwrap()
         };
         let (ea, eb) = (run(&ca), run(&cb));
         let (sa, sd) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt());

@@ -24,11 +24,11 @@ fn main() {
             model.schedule.forward_sample(x0, &z, t, &mut xt);
             let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [1, 3, TENSOR_H, TENSOR_W]), &model.device);
             let c = Tensor::<2>::from_data(TensorData::new(data[i].context.one_hot().to_vec(), [1, 132]), &model.device);
-            let eps: Vec<f32> = model.net.forward(xt_t.clone(), &[t], c).into_data().try_into_vec::<f32>().unwrap();
+            let eps: Vec<f32> = model.forward(xt_t.clone(), &[t], c).into_data().try_into_vec::<f32>().unwrap();
             // the same state with another sample's context: how much does the context matter?
             let other = &data[idx[(ii + 1) % idx.len()]].context;
             let cw = Tensor::<2>::from_data(TensorData::new(other.one_hot().to_vec(), [1, 132]), &model.device);
-            let epsw: Vec<f32> = model.net.forward(xt_t, &[t], cw).into_data().try_into_vec::<f32>().unwrap();
+            let epsw: Vec<f32> = model.forward(xt_t, &[t], cw).into_data().try_into_vec::<f32>().unwrap();
             for cell in 0..NUM_CELLS {
                 if data[i].context.labels[cell] == Primitive::Null { continue; }
                 for p in 0..POINTS_PER_CELL {

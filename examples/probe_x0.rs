@@ -23,7 +23,7 @@ fn main() {
         let mut xt = vec![0f32; TENSOR_LEN];
         sched.forward_sample(&x0, &z, t, &mut xt);
         let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &model.device);
-        let eps: Vec<f32> = model.net.forward(Tensor::<4>::from_data(TensorData::new(xt.clone(), [1, 3, TENSOR_H, TENSOR_W]), &model.device), &[t], ctx_t).into_data().try_into_vec().unwrap();
+        let eps: Vec<f32> = model.forward(Tensor::<4>::from_data(TensorData::new(xt.clone(), [1, 3, TENSOR_H, TENSOR_W]), &model.device), &[t], ctx_t).into_data().try_into_vec().unwrap();
         let (sa, sd) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt());
         let hw = TENSOR_H * TENSOR_W;
         let mk = |e: &dyn Fn(usize) -> f64| -> Vec<f32> { (0..TENSOR_LEN).map(|k| ((xt[k] as f64 - sched.qcoef[t] * sched.config.q[k / hw] - sd * e(k)) / sa) as f32).collect() };

@@ -151,7 +151,7 @@ fn template_prior_is_the_fixed_seed_sample_and_its_warm_start_changes_nothing() 
     let m = tiny_model();
     let mut cfg = m.meta.model.clone();
     cfg.prior = true;
-    let rec = sddpm::diffusion::net_bytes(&m.net).unwrap();
+    let rec = sddpm::diffusion::net_bytes(m.net.unet().unwrap()).unwrap();
     let with = sddpm::diffusion::load_net_with(&cfg, &rec, &m.device, true).unwrap();
     let mut rng = item_rng(9, 9);
     let x = layout(&sample_cells(&ctx, 1.0, &mut rng));
@@ -161,7 +161,7 @@ fn template_prior_is_the_fixed_seed_sample_and_its_warm_start_changes_nothing() 
         let ct = Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &m.device);
         net.forward(xt, &[50], ct).into_data().try_into_vec::<f32>().unwrap()
     };
-    assert_eq!(run(&m.net), run(&with));
+    assert_eq!(run(m.net.unet().unwrap()), run(&with));
 }
 
 #[test]
@@ -180,7 +180,7 @@ fn guidance_combines_the_conditional_and_unlabelled_predictions() {
     let eps = |oh: [f32; 132]| -> Vec<f32> {
         let xt = Tensor::<4>::from_data(TensorData::new(x.clone(), [1, 3, 64, 96]), &m.device);
         let ct = Tensor::<2>::from_data(TensorData::new(oh.to_vec(), [1, 132]), &m.device);
-        m.net.forward(xt, &[t], ct).into_data().try_into_vec::<f32>().unwrap()
+        m.forward(xt, &[t], ct).into_data().try_into_vec::<f32>().unwrap()
     };
     let (ec, eu) = (eps(ctx.one_hot()), eps(ctx.one_hot_unlabelled()));
     assert!(max_abs_diff(&ec, &eu) > 0.0, "the unlabelled context must change the prediction");
@@ -242,7 +242,7 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
     let ctx = Context::parse("THC+Z,cube,BHC+X,0,0,0,0,0,0,0,0,0").unwrap();
     let mut cfg = m.meta.model.clone();
     cfg.kernel = true;
-    let rec = sddpm::diffusion::net_bytes(&m.net).unwrap();
+    let rec = sddpm::diffusion::net_bytes(m.net.unet().unwrap()).unwrap();
     let with = sddpm::diffusion::load_net_with(&cfg, &rec, &m.device, true).unwrap().with_schedule(&m.schedule);
     let mut rng = item_rng(4, 4);
     let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
@@ -254,7 +254,7 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
         let xt = || Tensor::<4>::from_data(TensorData::new(x.clone(), [1, 3, 64, 96]), &m.device);
         let ct = || Tensor::<2>::from_data(TensorData::new(ctx.one_hot().to_vec(), [1, 132]), &m.device);
         // the gate and the input convolution start at zero: the warm start predicts what the loaded weights do
-        let a: Vec<f32> = m.net.forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
+        let a: Vec<f32> = m.forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
         let b: Vec<f32> = with.forward(xt(), &[t], ct()).into_data().try_into_vec().unwrap();
         assert_eq!(a, b, "t = {t}");
         // the estimate equals the posterior mean written out per point in f64

@@ -18,9 +18,16 @@ pub struct TrainArgs {
     /// Resume from a checkpoint folder (FILE.ckpt/ of an earlier run).
     #[arg(long)]
     pub resume: Option<PathBuf>,
-    /// Base width of the U-Net.
+    /// Architecture: "field" (the learned point denoiser, the default model) or
+    /// "unet" (the paper's U-Net; with --kernel, template attention).
+    #[arg(long, default_value = "field")]
+    pub arch: String,
+    /// Width: the point denoiser's hidden width (default 128) or the U-Net's base width (24).
     #[arg(long)]
     pub width: Option<usize>,
+    /// Residual blocks of the point denoiser (default 4).
+    #[arg(long)]
+    pub blocks: Option<usize>,
     /// Width of the pointwise head (0 = none; see ModelConfig::point_width).
     #[arg(long)]
     pub point_width: Option<usize>,
@@ -69,13 +76,31 @@ pub struct TrainArgs {
 }
 
 pub fn run(a: &TrainArgs) -> Result<i32> {
-    let mut cfg = TrainConfig { seed: a.seed, limit_samples: a.limit, ..Default::default() };
+    let base = match a.arch.as_str() {
+        "field" => TrainConfig::field_default(),
+        "unet" => TrainConfig::default(),
+        o => return Err(sddpm::Error::InvalidArgument(format!("--arch must be field or unet, got {o:?}"))),
+    };
+    let mut cfg = TrainConfig { seed: a.seed, limit_samples: a.limit, ..base };
     cfg.dataset.seed = a.seed;
     if let Some(e) = a.epochs {
         cfg.epochs = e;
     }
     if let Some(w) = a.width {
-        cfg.model.base_width = w;
+        if w == 0 {
+            return Err(sddpm::Error::InvalidArgument("--width must be positive".into()));
+        }
+        match cfg.model.field.as_mut() {
+            Some(f) => f.width = w,
+            None => cfg.model.base_width = w,
+        }
+    }
+    if let Some(b) = a.blocks {
+        match cfg.model.field.as_mut() {
+            Some(f) if b > 0 => f.blocks = b,
+            Some(_) => return Err(sddpm::Error::InvalidArgument("--blocks must be positive".into())),
+            None => return Err(sddpm::Error::InvalidArgument("--blocks is an option of --arch field".into())),
+        }
     }
     if let Some(p) = a.point_width {
         cfg.model.point_width = p;
@@ -107,6 +132,9 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     if let Some(w) = a.warmup {
         cfg.warmup_steps = w;
     }
+    if (a.kernel || a.prior || a.point_width.is_some() || a.init_from.is_some()) && cfg.model.field.is_some() {
+        return Err(sddpm::Error::InvalidArgument("--kernel, --prior, --point-width and --init-from are options of --arch unet".into()));
+    }
     if a.kernel {
         cfg.model.kernel = true;
     }
@@ -125,10 +153,11 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     cfg.init_from = a.init_from.clone();
     if !a.quiet {
         eprintln!(
-            "training: {} epochs, batch {}, width {}, lr {:.1e}, seed {}; checkpoints in {}",
+            "training {}: {} epochs, batch {}, width {}, lr {:.1e}, seed {}; checkpoints in {}",
+            a.arch,
             cfg.epochs,
             cfg.batch_size,
-            cfg.model.base_width,
+            cfg.model.field.as_ref().map_or(cfg.model.base_width, |f| f.width),
             cfg.learning_rate,
             cfg.seed,
             a.resume.clone().unwrap_or_else(|| checkpoint_dir_for(&a.output)).display()

@@ -6,15 +6,18 @@
 //! feature, and GPU backends behind `wgpu` / `cuda`.
 
 pub mod eval;
+pub mod field;
 pub mod model;
 pub mod sample;
 pub mod schedule;
 pub mod train;
+pub mod train_field;
 pub mod weights;
 
 use crate::error::{Error, Result};
 use burn::module::Module;
-use burn::tensor::Device;
+use burn::tensor::{Device, Tensor};
+use field::FieldNet;
 use model::{Denoiser, ModelConfig};
 use schedule::Schedule;
 use weights::WeightsMeta;
@@ -52,13 +55,68 @@ pub fn device(backend: Backend) -> Device {
 /// The default weights, trained by `sddpm train` from seed 42 and embedded in the library.
 pub static DEFAULT_WEIGHTS: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/models/default.sddpmw"));
 
+/// The network of a model: the learned point denoiser (the default, [`field`]) or
+/// the U-Net with its optional template attention ([`model`]).
+#[derive(Debug, Clone)]
+pub enum Net {
+    UNet(Denoiser),
+    Field(FieldNet),
+}
+
+impl Net {
+    /// The U-Net, if this is one.
+    pub fn unet(&self) -> Option<&Denoiser> {
+        match self {
+            Net::UNet(d) => Some(d),
+            Net::Field(_) => None,
+        }
+    }
+
+    /// The point denoiser, if this is one.
+    pub fn field(&self) -> Option<&FieldNet> {
+        match self {
+            Net::Field(f) => Some(f),
+            Net::UNet(_) => None,
+        }
+    }
+
+    pub fn num_params(&self) -> usize {
+        match self {
+            Net::UNet(d) => d.num_params(),
+            Net::Field(f) => f.num_params(),
+        }
+    }
+
+    /// Predict the noise. `x`: [B, 3, 64, 96]; `t`: the B timesteps; `ctx`: [B, 132].
+    pub fn forward(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>, schedule: &Schedule) -> Tensor<4> {
+        match self {
+            Net::UNet(d) => d.forward(x, t, ctx),
+            Net::Field(f) => field::eps_tensor(f, x, t, ctx, schedule),
+        }
+    }
+
+    /// The same network with the template attention's sampler options applied (a
+    /// no-op for networks without it).
+    pub fn configured(&self, kernel_gate: Option<f32>, visible_prior: bool) -> Net {
+        match self {
+            Net::UNet(d) => Net::UNet(d.clone().with_kernel_gate(kernel_gate).with_visible_prior(visible_prior)),
+            Net::Field(f) => Net::Field(f.clone()),
+        }
+    }
+
+    /// Whether this network has the template attention (the baseline generator).
+    pub fn has_template_attention(&self) -> bool {
+        matches!(self, Net::UNet(d) if d.has_kernel())
+    }
+}
+
 /// A loaded model: metadata, schedule and network on a device. Immutable once
 /// loaded, so one `Model` may be shared by threads.
 #[derive(Debug)]
 pub struct Model {
     pub meta: WeightsMeta,
     pub schedule: Schedule,
-    pub net: Denoiser,
+    pub net: Net,
     pub device: Device,
 }
 
@@ -84,19 +142,19 @@ impl Model {
         let (meta, record) = weights::decode(bytes)?;
         let device = device(backend);
         let schedule = Schedule::new(meta.schedule.clone());
-        let net = load_net(&meta.model, record, &device)?.with_schedule(&schedule);
+        let net = load_any_net(&meta.model, record, &device, &schedule)?;
         Ok(Model { meta, schedule, net, device })
     }
 
     /// Serialise (metadata + parameters) into the weights-file format.
     pub fn to_bytes(&self) -> Result<Vec<u8>> {
-        Ok(weights::encode(&self.meta, &net_bytes(&self.net)?))
+        Ok(weights::encode(&self.meta, &any_net_bytes(&self.net, false)?))
     }
 
     /// The same model as a weights-file image with half-precision parameters.
     pub fn to_bytes_f16(&self) -> Result<Vec<u8>> {
         let meta = weights::WeightsMeta { dtype: "f16".into(), ..self.meta.clone() };
-        Ok(weights::encode(&meta, &net_bytes_f16(&self.net)?))
+        Ok(weights::encode(&meta, &any_net_bytes(&self.net, true)?))
     }
 
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
@@ -107,29 +165,97 @@ impl Model {
     pub fn parameter_count(&self) -> usize {
         self.net.num_params()
     }
+
+    /// Predict the noise (see [`Net::forward`]).
+    pub fn forward(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Tensor<4> {
+        self.net.forward(x, t, ctx, &self.schedule)
+    }
+
+    /// The name of the generator these weights make: "field-<params>k" for the
+    /// learned point denoiser, "unet-<params>k" for the U-Net (whose default sampler
+    /// uses the template estimate: see [`generator_name`]).
+    pub fn weights_name(&self) -> String {
+        let kind = match self.net {
+            Net::Field(_) => "field",
+            Net::UNet(_) => "unet",
+        };
+        format!("{kind}-{}k-seed{}-e{}", self.parameter_count() / 1000, self.meta.training.seed, self.meta.training.epochs)
+    }
 }
 
-/// Parameters of a network as a burnpack byte record in half precision (IEEE
-/// binary16): half the size; loading casts back to f32 (`load_net`).
-pub fn net_bytes_f16(net: &Denoiser) -> Result<Vec<u8>> {
+/// The record bytes of either network, optionally in half precision.
+pub fn any_net_bytes(net: &Net, half: bool) -> Result<Vec<u8>> {
+    match (net, half) {
+        (Net::UNet(d), false) => net_bytes(d),
+        (Net::UNet(d), true) => net_bytes_f16(d),
+        (Net::Field(f), false) => module_bytes(f.clone()),
+        (Net::Field(f), true) => module_bytes_f16(f.clone()),
+    }
+}
+
+/// Build the network a configuration names and load a record into it.
+pub fn load_any_net(cfg: &ModelConfig, record: &[u8], device: &Device, schedule: &Schedule) -> Result<Net> {
+    match &cfg.field {
+        Some(fc) => {
+            let fresh = fresh_field(fc, device, None);
+            Ok(Net::Field(load_module(fresh, record, false)?))
+        }
+        None => Ok(Net::UNet(load_net(cfg, record, device)?.with_schedule(schedule))),
+    }
+}
+
+/// A freshly initialised point denoiser (seeded like [`fresh_net`]).
+pub(crate) fn fresh_field(cfg: &field::FieldConfig, device: &Device, seed: Option<u64>) -> FieldNet {
+    let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(s) = seed {
+        device.seed(s);
+    }
+    FieldNet::new(cfg, device)
+}
+
+/// Any module's parameters as a burnpack byte record.
+pub fn module_bytes<M: Module>(m: M) -> Result<Vec<u8>> {
+    let b = m.into_record().into_bytes().map_err(|e| Error::Model(format!("cannot serialise the parameters: {e:?}")))?;
+    Ok(b.to_vec())
+}
+
+/// Any module's parameters as a burnpack byte record in half precision.
+pub fn module_bytes_f16<M: Module>(m: M) -> Result<Vec<u8>> {
     use burn::module::{ModuleMapper, Param};
-    use burn::tensor::{FloatDType, Tensor};
+    use burn::tensor::FloatDType;
     struct ToF16;
     impl ModuleMapper for ToF16 {
         fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
             param.map(|t| t.cast(FloatDType::F16))
         }
     }
-    let half = net.clone().map(&mut ToF16);
-    let b = half.into_record().into_bytes().map_err(|e| Error::Model(format!("cannot serialise the parameters: {e:?}")))?;
-    Ok(b.to_vec())
+    module_bytes(m.map(&mut ToF16))
+}
+
+/// Load a burnpack record into a module (cast to the module's dtype); a corrupt or
+/// mismatched record is an error, never a panic.
+pub fn load_module<M: Module>(m: M, record: &[u8], partial: bool) -> Result<M> {
+    let bytes = burn::tensor::Bytes::from_bytes_vec(record.to_vec());
+    let rec = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| burn::store::ModuleRecord::from_bytes(bytes)))
+        .map_err(|_| Error::Model("the parameter record is corrupt".into()))?
+        .map_err(|e| Error::Model(format!("the parameter record cannot be read: {e:?}")))?;
+    let rec = rec.cast_to_module_dtype().allow_partial(partial);
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| m.try_load_record(rec)))
+        .map_err(|_| Error::Model("the parameter record does not match the architecture".into()))?
+        .map_err(|e| Error::Model(format!("the parameter record does not match the architecture: {e:?}")))
+}
+
+static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Parameters of a network as a burnpack byte record in half precision (IEEE
+/// binary16): half the size; loading casts back to f32 (`load_net`).
+pub fn net_bytes_f16(net: &Denoiser) -> Result<Vec<u8>> {
+    module_bytes_f16(net.clone())
 }
 
 /// Parameters of a network as a burnpack byte record.
 pub fn net_bytes(net: &Denoiser) -> Result<Vec<u8>> {
-    let rec = net.clone().into_record();
-    let b = rec.into_bytes().map_err(|e| Error::Model(format!("cannot serialise the parameters: {e:?}")))?;
-    Ok(b.to_vec())
+    module_bytes(net.clone())
 }
 
 /// Build a network of the given architecture and load a burnpack record into it.
@@ -150,8 +276,7 @@ pub fn load_net_with(cfg: &ModelConfig, record: &[u8], device: &Device, partial:
 /// the draws of another thread's construction (a model loaded concurrently, tests
 /// run in parallel): the same seed gives the same weights.
 pub(crate) fn fresh_net(cfg: &ModelConfig, device: &Device, seed: Option<u64>) -> Denoiser {
-    static INIT: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let _guard = INIT.lock().unwrap_or_else(|e| e.into_inner());
+    let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     if let Some(s) = seed {
         device.seed(s);
     }
@@ -161,14 +286,5 @@ pub(crate) fn fresh_net(cfg: &ModelConfig, device: &Device, seed: Option<u64>) -
 /// As [`load_net_with`], the parameters missing from a partial record initialised
 /// from `seed`.
 pub(crate) fn load_net_seeded(cfg: &ModelConfig, record: &[u8], device: &Device, partial: bool, seed: Option<u64>) -> Result<Denoiser> {
-    let bytes = burn::tensor::Bytes::from_bytes_vec(record.to_vec());
-    // Parsing foreign bytes must never take the process down: catch a panic in the decoder.
-    let rec = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| burn::store::ModuleRecord::from_bytes(bytes)))
-        .map_err(|_| Error::Model("the parameter record is corrupt".into()))?
-        .map_err(|e| Error::Model(format!("the parameter record cannot be read: {e:?}")))?;
-    let net = fresh_net(cfg, device, seed);
-    let rec = rec.cast_to_module_dtype().allow_partial(partial);
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| net.try_load_record(rec)))
-        .map_err(|_| Error::Model("the parameter record does not match the architecture".into()))?
-        .map_err(|e| Error::Model(format!("the parameter record does not match the architecture: {e:?}")))
+    load_module(fresh_net(cfg, device, seed), record, partial)
 }

@@ -66,11 +66,15 @@ pub struct ModelConfig {
     /// measured to ignore the label (BENCHMARKS.md, "The root cause").
     #[serde(default)]
     pub kernel: bool,
+    /// The learned point denoiser instead of the U-Net ([`super::field`]); when set,
+    /// every U-Net field above is ignored.
+    #[serde(default)]
+    pub field: Option<super::field::FieldConfig>,
 }
 
 impl Default for ModelConfig {
     fn default() -> Self {
-        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0, prior: false, kernel: false }
+        ModelConfig { base_width: 24, mults: [1, 2, 2], time_dim: 64, emb_dim: 128, cell_dim: 16, groups: 8, point_width: 0, prior: false, kernel: false, field: None }
     }
 }
 
@@ -298,6 +302,11 @@ impl Denoiser {
             k.visible_prior = visible;
         }
         self
+    }
+
+    /// Whether the network has the template attention.
+    pub fn has_kernel(&self) -> bool {
+        self.kernel.is_some()
     }
 
     /// The template attention's estimate (x0_hat, eps_hat) for a batch, or None

@@ -193,7 +193,7 @@ pub fn reverse_diffusion(
     let n = inputs.len();
     let configured;
     let net = if opts.kernel_gate.is_some() || opts.visible_prior {
-        configured = model.net.clone().with_kernel_gate(opts.kernel_gate.map(|g| g as f32)).with_visible_prior(opts.visible_prior);
+        configured = model.net.configured(opts.kernel_gate.map(|g| g as f32), opts.visible_prior);
         &configured
     } else {
         &model.net
@@ -244,7 +244,7 @@ pub fn reverse_diffusion(
                 None => (x.clone(), b, ctx_t.clone()),
             };
             let xt = Tensor::<4>::from_data(TensorData::new(xin, [bb, 3, TENSOR_H, TENSOR_W]), &model.device);
-            let eps = net.forward(xt, &vec![t; bb], ct);
+            let eps = net.forward(xt, &vec![t; bb], ct, sched);
             let mut eps: Vec<f32> = eps
                 .into_data()
                 .try_into_vec::<f32>()
@@ -317,7 +317,6 @@ pub fn reverse_diffusion(
                 }
                 let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &model.device);
                 let eps: Vec<f32> = model
-                    .net
                     .forward(xt_t, &vec![t; b], ctx_t.clone())
                     .into_data()
                     .try_into_vec::<f32>()
