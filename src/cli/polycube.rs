@@ -145,6 +145,7 @@ pub fn run(a: &PolycubeArgs) -> Result<i32> {
             "labels": chosen.map(|c| c.labels.to_vec()),
             "names": chosen.map(|c| c.context.names()),
             "source": result.source,
+            "generator": result.generator,
             "candidates": result.candidates.len(),
             "verified": result.verified().count(),
             "genus": chosen.and_then(|c| c.context.validity().genus),

@@ -603,7 +603,7 @@ pub fn generate_auto(
         all_global = passed_over;
     }
     timings.total = t_all.elapsed().as_secs_f64();
-    let result = finish(input, input_genus, "auto", all_global, timings);
+    let result = finish(input, input_genus, "auto", all_global, timings, model.generator_name(opts.sampler.kernel_gate));
     Ok((result, report))
 }
 

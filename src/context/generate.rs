@@ -221,6 +221,9 @@ pub struct PolycubeResult {
     /// Index of the chosen candidate (verified, best score).
     pub chosen: Option<usize>,
     pub timings: PolycubeTimings,
+    /// The generator that made the outputs: the learned weights' name, or
+    /// "template" for the closed-form template estimate (`Model::generator_name`).
+    pub generator: String,
 }
 
 impl PolycubeResult {
@@ -691,18 +694,18 @@ pub fn generate_from_contexts(
     timings.precheck = t0.elapsed().as_secs_f64();
     diffuse_and_verify(model, &mut cands, opts, progress, &mut timings)?;
     timings.total = t_all.elapsed().as_secs_f64();
-    Ok(finish(input, input_genus, "user", cands, timings))
+    Ok(finish(input, input_genus, "user", cands, timings, model.generator_name(opts.sampler.kernel_gate)))
 }
 
 /// Rank the verified candidates and build the result.
-pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cands: Vec<Candidate>, timings: PolycubeTimings) -> PolycubeResult {
+pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cands: Vec<Candidate>, timings: PolycubeTimings, generator: String) -> PolycubeResult {
     let chosen = cands
         .iter()
         .enumerate()
         .filter(|(_, c)| c.stage == Stage::Verified && c.output.is_some())
         .min_by(|a, b| a.1.score.unwrap_or(f64::INFINITY).total_cmp(&b.1.score.unwrap_or(f64::INFINITY)))
         .map(|(i, _)| i);
-    PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings }
+    PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings, generator }
 }
 
 #[cfg(test)]

@@ -314,3 +314,187 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
     }
     Ok((rows, gocc))
 }
+
+/// One timestep of the label probe ([`label_probe`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct ProbeRow {
+    pub t: usize,
+    /// RMS over the cell's 512 x 3 values of the model's e_A - e_B.
+    pub model_diff: f64,
+    /// The same for the Bayes-optimal predictors of A and of B.
+    pub bayes_diff: f64,
+    /// model_diff / bayes_diff.
+    pub ratio: f64,
+    /// Cosine between the model's and the Bayes-optimal difference.
+    pub cosine: f64,
+    /// RMS error of the model's e_A against the noise actually added.
+    pub model_err: f64,
+    /// RMS error of the Bayes-optimal e_A against that noise.
+    pub bayes_err: f64,
+}
+
+/// Bayes-optimal noise of one cell's slots given `draws` independent sorted samples
+/// of its primitive (the p-th point of each draw is a draw from p(x_0 | rank p)).
+fn bayes_eps(draws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: [f64; 3]) -> Vec<f64> {
+    use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL};
+    let mut out = Vec::with_capacity(POINTS_PER_CELL * 3);
+    let mut w = vec![0f64; draws.len()];
+    for p in 0..POINTS_PER_CELL {
+        let (r, c) = slot(n, p);
+        let y: [f64; 3] = std::array::from_fn(|ch| xt[flat(ch, r, c)] as f64 - shift[ch]);
+        for (k, d) in draws.iter().enumerate() {
+            w[k] = -(0..3).map(|ch| (y[ch] - sa * d[flat(ch, r, c)] as f64).powi(2)).sum::<f64>() / (2.0 * sd * sd);
+        }
+        let m = w.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let tot: f64 = w.iter_mut().map(|v| {
+            *v = (*v - m).exp();
+            *v
+        }).sum();
+        for ch in 0..3 {
+            let mx: f64 = draws.iter().zip(&w).map(|(d, wi)| wi * d[flat(ch, r, c)] as f64).sum::<f64>() / tot;
+            out.push((y[ch] - sa * mx) / sd);
+        }
+    }
+    out
+}
+
+/// The label probe (BENCHMARKS.md "The root cause"): a cell of single-cell context A
+/// is sampled (seeded), forward-noised at t, and the model predicts the noise under
+/// A and under B (same cell, another label); the Bayes-optimal predictors of A and B
+/// (300 sorted samplings each) give the difference the label should make. Averaged
+/// over `trials` fresh cells and noises per t (sums of squares pooled).
+pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: u64, trials: usize) -> Result<Vec<ProbeRow>> {
+    use crate::polycube::tensor::{flat, layout, slot, POINTS_PER_CELL, TENSOR_H, TENSOR_LEN, TENSOR_W};
+    use burn::tensor::{Tensor, TensorData};
+    use rand_distr::{Distribution, StandardNormal};
+    let n = a.occupied().next().ok_or_else(|| crate::error::Error::InvalidArgument("context A has no occupied cell".into()))?;
+    if a.occupied().count() != 1 || b.occupied().collect::<Vec<_>>() != vec![n] {
+        return Err(crate::error::Error::InvalidArgument("the label probe takes two single-cell contexts on the same cell".into()));
+    }
+    let draws = |c: &Context, s: u64| -> Vec<Vec<f32>> {
+        (0..300u64).map(|k| layout(&sample_cells(c, 1.0, &mut item_rng(s, k)))).collect()
+    };
+    let (da, db) = (draws(a, seed ^ 0xa), draws(b, seed ^ 0xb));
+    let sched = &model.schedule;
+    let idx: Vec<usize> = (0..POINTS_PER_CELL).flat_map(|p| {
+        let (r, c) = slot(n, p);
+        (0..3).map(move |ch| flat(ch, r, c))
+    }).collect();
+    let predict = |xt: &[f32], t: usize, c: &Context| -> Vec<f32> {
+        let ct = Tensor::<2>::from_data(TensorData::new(c.one_hot().to_vec(), [1, crate::polycube::CONTEXT_DIM]), &model.device);
+        let x = Tensor::<4>::from_data(TensorData::new(xt.to_vec(), [1, 3, TENSOR_H, TENSOR_W]), &model.device);
+        model.forward(x, &[t], ct).into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
+    };
+    let mut rows = Vec::new();
+    for &t in ts {
+        let (mut dm, mut dbay, mut dot, mut em, mut eb) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for trial in 0..trials {
+            let mut rng = item_rng(seed ^ 0x9e0b, (t * 1000 + trial) as u64);
+            let x0 = layout(&sample_cells(a, 1.0, &mut rng));
+            let z: Vec<f32> = (0..TENSOR_LEN).map(|_| StandardNormal.sample(&mut rng)).collect();
+            let mut xt = vec![0f32; TENSOR_LEN];
+            sched.forward_sample(&x0, &z, t, &mut xt);
+            let (ea, eb_) = (predict(&xt, t, a), predict(&xt, t, b));
+            let (sa, sd) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt());
+            let shift = sched.config.q.map(|q| sched.qcoef[t] * q);
+            let (ba, bb) = (bayes_eps(&da, &xt, n, sa, sd, shift), bayes_eps(&db, &xt, n, sa, sd, shift));
+            for (i, &k) in idx.iter().enumerate() {
+                let m = (ea[k] - eb_[k]) as f64;
+                let y = ba[i] - bb[i];
+                dm += m * m;
+                dbay += y * y;
+                dot += m * y;
+                em += (ea[k] as f64 - z[k] as f64).powi(2);
+                eb += (ba[i] - z[k] as f64).powi(2);
+            }
+        }
+        let cnt = (trials * idx.len()) as f64;
+        rows.push(ProbeRow {
+            t,
+            model_diff: (dm / cnt).sqrt(),
+            bayes_diff: (dbay / cnt).sqrt(),
+            ratio: (dm / dbay).sqrt(),
+            cosine: dot / (dm.sqrt() * dbay.sqrt()).max(1e-30),
+            model_err: (em / cnt).sqrt(),
+            bayes_err: (eb / cnt).sqrt(),
+        });
+    }
+    Ok(rows)
+}
+
+/// What [`generator_eval`] measures for one generator on one set of cases.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct GeneratorEval {
+    pub cases: usize,
+    /// True contexts verified (GOCC + TCV, the pre-check as configured; no retry
+    /// unless the options ask for one).
+    pub true_verified: usize,
+    /// Of the true contexts that failed, those the pre-check refused.
+    pub true_precheck_refused: usize,
+    /// One-cell relabelled, genus-consistent, non-congruent contexts diffused with
+    /// the geometric pre-check off ...
+    pub wrong_trials: usize,
+    /// ... and refused by GOCC or TCV on the output.
+    pub wrong_refused: usize,
+    /// Median over the true contexts' occupied slots of |output - input|, cell units.
+    pub median_displacement: f64,
+    /// Mean Chamfer distance of the true contexts' outputs to the exact polycube's
+    /// cells (squared cell units).
+    pub mean_chamfer: f64,
+    pub seconds: f64,
+    /// Failures of true contexts, naming the case.
+    pub failures: Vec<String>,
+}
+
+/// The generator benchmark's measurement on `n` synthetic cases of `seed` with
+/// `min..=max` occupied cells: true contexts verified, relabelled contexts refused by
+/// the verification of the output (pre-check off for those), correspondence
+/// displacement and Chamfer distance to the truth.
+pub fn generator_eval(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions) -> Result<GeneratorEval> {
+    let t0 = std::time::Instant::now();
+    let mut e = GeneratorEval { cases: n, ..Default::default() };
+    let no_precheck = PolycubeOptions { max_fit: f64::INFINITY, relative_fit: 0.0, neighbour_fit_ratio: 0.0, max_in_empty_fraction: 1.0, min_occupied_fraction: 0.0, ..opts.clone() };
+    let mut disp: Vec<f64> = Vec::new();
+    let (mut ch_sum, mut ch_n) = (0.0, 0usize);
+    for (i, (ctx, mesh)) in cases(seed, n, min, max, &SyntheticOptions::default()).into_iter().enumerate() {
+        let g = ctx.validity().genus.unwrap_or(0);
+        let r = generate_from_contexts(model, &mesh, g, &[ctx], opts, &mut NoProgress)?;
+        let c = &r.candidates[0];
+        if c.stage == Stage::Verified {
+            e.true_verified += 1;
+        } else {
+            if c.stage == Stage::Occupancy {
+                e.true_precheck_refused += 1;
+            }
+            let why = c.report.as_ref().and_then(|r| r.reason.clone()).unwrap_or_else(|| "refused by the pre-check".into());
+            e.failures.push(format!("case {i} {ctx}: {why}"));
+        }
+        if let (Some(out), Some(inp)) = (&c.output, &c.input) {
+            let (o, x) = (unlayout(out), unlayout(&inp.tensor));
+            let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
+            let exact = if opts.verify.visible_coverage { crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng) } else { sample_cells(&ctx, 1.0, &mut rng) };
+            let s = 1.0 / inp.frame.scale;
+            for k in ctx.occupied() {
+                for (a, b) in o[k].iter().zip(&x[k]) {
+                    disp.push(((0..3).map(|ch| ((a[ch] - b[ch]) as f64).powi(2)).sum::<f64>()).sqrt() * s);
+                }
+                let a: Vec<[f64; 3]> = o[k].iter().map(|p| p.map(|v| v as f64 * s)).collect();
+                let b: Vec<[f64; 3]> = exact[k].iter().map(|p| p.map(|v| v as f64 * s)).collect();
+                ch_sum += chamfer(&a, &b);
+                ch_n += 1;
+            }
+        }
+        if let Some(w) = wrong_context(&ctx, i as u64) {
+            let r = generate_from_contexts(model, &mesh, g, &[w], &no_precheck, &mut NoProgress)?;
+            e.wrong_trials += 1;
+            if r.candidates[0].stage != Stage::Verified {
+                e.wrong_refused += 1;
+            }
+        }
+    }
+    disp.sort_by(f64::total_cmp);
+    e.median_displacement = disp.get(disp.len() / 2).copied().unwrap_or(f64::NAN);
+    e.mean_chamfer = ch_sum / ch_n.max(1) as f64;
+    e.seconds = t0.elapsed().as_secs_f64();
+    Ok(e)
+}

@@ -61,6 +61,8 @@ pub static DEFAULT_WEIGHTS: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_
 pub enum Net {
     UNet(Denoiser),
     Field(FieldNet),
+    /// The closed-form template estimate alone (the baseline generator; no weights).
+    Template(model::KernelHead),
 }
 
 impl Net {
@@ -68,7 +70,7 @@ impl Net {
     pub fn unet(&self) -> Option<&Denoiser> {
         match self {
             Net::UNet(d) => Some(d),
-            Net::Field(_) => None,
+            _ => None,
         }
     }
 
@@ -76,7 +78,7 @@ impl Net {
     pub fn field(&self) -> Option<&FieldNet> {
         match self {
             Net::Field(f) => Some(f),
-            Net::UNet(_) => None,
+            _ => None,
         }
     }
 
@@ -84,6 +86,7 @@ impl Net {
         match self {
             Net::UNet(d) => d.num_params(),
             Net::Field(f) => f.num_params(),
+            Net::Template(_) => 0,
         }
     }
 
@@ -92,6 +95,7 @@ impl Net {
         match self {
             Net::UNet(d) => d.forward(x, t, ctx),
             Net::Field(f) => field::eps_tensor(f, x, t, ctx, schedule),
+            Net::Template(k) => k.template_eps(x, t, ctx),
         }
     }
 
@@ -101,12 +105,18 @@ impl Net {
         match self {
             Net::UNet(d) => Net::UNet(d.clone().with_kernel_gate(kernel_gate).with_visible_prior(visible_prior)),
             Net::Field(f) => Net::Field(f.clone()),
+            Net::Template(k) => Net::Template(k.clone().with_visible_prior(visible_prior)),
         }
     }
 
-    /// Whether this network has the template attention (the baseline generator).
-    pub fn has_template_attention(&self) -> bool {
-        matches!(self, Net::UNet(d) if d.has_kernel())
+    /// Whether sampling with this network (and the sampler's template-attention
+    /// gate) evaluates the template estimate alone, i.e. is the baseline generator.
+    pub fn is_template(&self, kernel_gate: Option<f64>) -> bool {
+        match self {
+            Net::Template(_) => true,
+            Net::UNet(d) => d.has_kernel() && kernel_gate == Some(1.0),
+            Net::Field(_) => false,
+        }
     }
 }
 
@@ -171,17 +181,48 @@ impl Model {
         self.net.forward(x, t, ctx, &self.schedule)
     }
 
-    /// The name of the generator these weights make: "field-<params>k" for the
-    /// learned point denoiser, "unet-<params>k" for the U-Net (whose default sampler
-    /// uses the template estimate: see [`generator_name`]).
-    pub fn weights_name(&self) -> String {
+    /// The name of the generator that sampling with these options runs: "template"
+    /// for the closed-form template estimate (the baseline), otherwise the learned
+    /// weights' name, "<arch>-<thousands of parameters>k-seed<S>-e<epochs>".
+    pub fn generator_name(&self, kernel_gate: Option<f64>) -> String {
+        if self.net.is_template(kernel_gate) {
+            return TEMPLATE_GENERATOR.to_string();
+        }
         let kind = match self.net {
             Net::Field(_) => "field",
-            Net::UNet(_) => "unet",
+            _ => "unet",
         };
         format!("{kind}-{}k-seed{}-e{}", self.parameter_count() / 1000, self.meta.training.seed, self.meta.training.epochs)
     }
+
+    /// The baseline generator: the closed-form template estimate with the jitter and
+    /// rank width the template-attention training reached ([`TEMPLATE_SIGMA`],
+    /// [`TEMPLATE_RHO`]), on the reference schedule. Needs no weights.
+    pub fn template() -> Model {
+        let device = device(Backend::default());
+        let schedule = Schedule::new(schedule::ScheduleConfig::default());
+        let net = Net::Template(model::KernelHead::template_estimator(TEMPLATE_SIGMA, TEMPLATE_RHO, &schedule, &device));
+        let meta = WeightsMeta {
+            format_version: 1,
+            library_version: env!("CARGO_PKG_VERSION").to_string(),
+            model: ModelConfig::default(),
+            schedule: schedule.config.clone(),
+            dataset: Default::default(),
+            training: Default::default(),
+            dtype: "none".into(),
+        };
+        Model { meta, schedule, net, device }
+    }
 }
+
+/// The generator name of the closed-form template estimate.
+pub const TEMPLATE_GENERATOR: &str = "template";
+/// Jitter of the baseline template estimate, cell units: the value the template
+/// attention's one-epoch training reached from 0.03 (the U-Net with template
+/// attention, `models/` history in docs/history.md).
+pub const TEMPLATE_SIGMA: f64 = 0.029325528131659846;
+/// Rank width of the baseline template estimate, slots (trained from 12).
+pub const TEMPLATE_RHO: f64 = 12.230174893930755;
 
 /// The record bytes of either network, optionally in half precision.
 pub fn any_net_bytes(net: &Net, half: bool) -> Result<Vec<u8>> {
@@ -190,6 +231,7 @@ pub fn any_net_bytes(net: &Net, half: bool) -> Result<Vec<u8>> {
         (Net::UNet(d), true) => net_bytes_f16(d),
         (Net::Field(f), false) => module_bytes(f.clone()),
         (Net::Field(f), true) => module_bytes_f16(f.clone()),
+        (Net::Template(_), _) => Err(Error::Model("the template estimate has no weights to save".into())),
     }
 }
 

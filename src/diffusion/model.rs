@@ -274,13 +274,7 @@ impl Denoiser {
     /// with `kernel` must be given its schedule before `forward`.
     pub fn with_schedule(mut self, s: &super::schedule::Schedule) -> Self {
         if let Some(k) = self.kernel.as_mut() {
-            k.coef = (0..=s.steps())
-                .map(|t| {
-                    let ab = s.alpha_bar[t];
-                    let sh = s.config.q.map(|q| (s.qcoef[t] * q) as f32);
-                    [ab.sqrt() as f32, (1.0 - ab).sqrt().max(1e-6) as f32, sh[0], sh[1], sh[2]]
-                })
-                .collect();
+            k.coef = kernel_coefficients(s);
         }
         self
     }
@@ -307,6 +301,13 @@ impl Denoiser {
     /// Whether the network has the template attention.
     pub fn has_kernel(&self) -> bool {
         self.kernel.is_some()
+    }
+
+    /// The template attention's trained (sigma, rho), if it has one.
+    pub fn kernel_params(&self) -> Option<(f64, f64)> {
+        let k = self.kernel.as_ref()?;
+        let scalar = |v: Tensor<1>| v.into_data().convert::<f64>().try_into_vec::<f64>().ok().and_then(|v| v.first().copied()).unwrap_or(f64::NAN);
+        Some((scalar(k.log_sigma.val()).exp(), scalar(k.log_rho.val()).exp()))
     }
 
     /// The template attention's estimate (x0_hat, eps_hat) for a batch, or None
@@ -490,6 +491,29 @@ impl KernelHead {
 }
 
 impl KernelHead {
+    /// The closed-form template estimate on its own (the baseline generator): the
+    /// attention with jitter `sigma` (cell units) and rank width `rho` (slots) over
+    /// the label's fixed-seed template sample, for the forward process `schedule`.
+    pub fn template_estimator(sigma: f64, rho: f64, schedule: &super::schedule::Schedule, device: &Device) -> KernelHead {
+        let mut k = KernelHead::new(1, 1, device);
+        k.log_sigma = burn::module::Param::from_tensor(Tensor::<1>::from_floats([sigma.ln() as f32], device));
+        k.log_rho = burn::module::Param::from_tensor(Tensor::<1>::from_floats([rho.ln() as f32], device));
+        k.gate_override = Some(1.0);
+        k.coef = kernel_coefficients(schedule);
+        k
+    }
+
+    /// The estimate's noise for a batch (see [`KernelHead::estimate_eps_direct`]).
+    pub fn template_eps(&self, x: Tensor<4>, t: &[usize], ctx: Tensor<2>) -> Tensor<4> {
+        self.estimate_eps_direct(x, t, ctx)
+    }
+
+    /// Attend to each cell's visible primitive (see [`Denoiser::with_visible_prior`]).
+    pub fn with_visible_prior(mut self, visible: bool) -> Self {
+        self.visible_prior = visible;
+        self
+    }
+
     /// The noise of [`KernelHead::estimate`] computed per cell on the CPU, for the
     /// estimate alone (gate 1, the sampler's default). The same formula, but a cell
     /// whose prior is all zero (null or withheld) needs no attention (its prior mean
@@ -579,6 +603,17 @@ impl KernelHead {
         }
         Tensor::<4>::from_data(TensorData::new(eps, [b, 3, TENSOR_H, TENSOR_W]), &device)
     }
+}
+
+/// Per timestep: sqrt(ab), sqrt(1 - ab) and the mean shift per channel.
+fn kernel_coefficients(s: &super::schedule::Schedule) -> Vec<[f32; 5]> {
+    (0..=s.steps())
+        .map(|t| {
+            let ab = s.alpha_bar[t];
+            let sh = s.config.q.map(|q| (s.qcoef[t] * q) as f32);
+            [ab.sqrt() as f32, (1.0 - ab).sqrt().max(1e-6) as f32, sh[0], sh[1], sh[2]]
+        })
+        .collect()
 }
 
 /// [B, 3, 64, 96] -> [B * 12, 512, 3]: each cell block's points (block order).

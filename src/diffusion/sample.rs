@@ -39,6 +39,13 @@ pub struct SamplerOptions {
     /// the x_0 of the forward process at that step: x'_start = sqrt(ab) x_in +
     /// sqrt(1 - ab) z + Q q, so the network sees the kind of state it was trained on.
     pub start_step: usize,
+    /// Start from the noise level instead of a fixed step: each candidate starts at
+    /// the first step whose noise sqrt(1 - ab_t) / sqrt(ab_t), in its cells' units
+    /// (normalised units over the cell edge), reaches this value; overrides
+    /// `start_step`. The same step means three times the noise in cell units for a
+    /// context three cells long as for one cell, and the denoiser works in cell
+    /// units. None = use `start_step`.
+    pub start_noise: Option<f64>,
     /// Use the raw input geometry as x'_T without forward noising (DESIGN.md's literal
     /// reading; measured to be worse, see BENCHMARKS.md).
     pub raw_start: bool,
@@ -88,6 +95,7 @@ impl Default for SamplerOptions {
             keep_every: 0,
             max_batch: 16,
             start_step: DEFAULT_START_STEP,
+            start_noise: None,
             raw_start: false,
             refine_passes: DEFAULT_REFINE_PASSES,
             refine_t: DEFAULT_REFINE_T,
@@ -123,6 +131,20 @@ pub const DEFAULT_REFINE_T: usize = 20;
 /// but not the interior points that make TCV fail, and it would make GOCC's
 /// "points in their own cell" check pass by construction).
 pub const DEFAULT_CLIP_MARGIN: f64 = -1.0;
+
+/// The step a candidate's reverse process starts from (see
+/// [`SamplerOptions::start_noise`]).
+pub fn start_step_for(sched: &super::schedule::Schedule, opts: &SamplerOptions, ctx: &Context) -> usize {
+    let t_max = sched.steps();
+    if let (Some(sigma), Some(frame)) = (opts.start_noise, crate::polycube::dataset::context_frame(ctx)) {
+        return (1..=t_max).find(|&t| ((1.0 - sched.alpha_bar[t]) / sched.alpha_bar[t]).sqrt() / frame.scale >= sigma).unwrap_or(t_max);
+    }
+    if opts.start_step == 0 {
+        t_max
+    } else {
+        opts.start_step.min(t_max)
+    }
+}
 
 /// Per-slot clipping boxes [lo, hi] (model frame) of one context: each occupied
 /// cell's box grown by `margin` cell units; None for null cells.
@@ -169,6 +191,9 @@ pub fn reverse_diffusion(
     opts: &SamplerOptions,
     progress: &mut dyn Progress,
 ) -> Result<SampleOutput> {
+    if opts.start_noise.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+        return Err(Error::InvalidArgument(format!("the sampler's start noise must be positive, got {:?}", opts.start_noise)));
+    }
     if !opts.guidance.is_finite() || !opts.eps_scale.is_finite() || opts.kernel_gate.is_some_and(|g| !g.is_finite()) {
         return Err(Error::InvalidArgument(format!(
             "sampler weights must be finite (guidance {}, eps_scale {}, kernel_gate {:?})",
@@ -198,19 +223,29 @@ pub fn reverse_diffusion(
     } else {
         &model.net
     };
-    let mut out = SampleOutput { tensors: Vec::with_capacity(n), trajectory: vec![Vec::new(); n] };
+    let mut out = SampleOutput { tensors: vec![Vec::new(); n], trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;
-    let t_start = if opts.start_step == 0 { sched.steps() } else { opts.start_step.min(sched.steps()) };
-    let ts = timesteps(t_start, opts.steps);
-    let ancestral = ts.len() == t_start;
+    // each candidate's start step: fixed, or from its cells' noise level in cell units
+    let starts: Vec<usize> = contexts.iter().map(|c| start_step_for(sched, opts, c)).collect();
     let batch = opts.max_batch.max(1);
-    let total_calls = n.div_ceil(batch) * ts.len();
+    // candidates sharing a start step run together, in batches, in index order
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut distinct: Vec<usize> = starts.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    for &t0 in distinct.iter().rev() {
+        let members: Vec<usize> = (0..n).filter(|&i| starts[i] == t0).collect();
+        groups.extend(members.chunks(batch).map(|c| c.to_vec()));
+    }
+    let total_calls: usize = groups.iter().map(|g| timesteps(starts[g[0]], opts.steps).len()).sum::<usize>().max(1);
     let mut calls = 0usize;
-    for start in (0..n).step_by(batch) {
-        let end = (start + batch).min(n);
-        let b = end - start;
-        let mut x: Vec<f32> = inputs[start..end].concat();
-        let mut rngs: Vec<_> = (start..end).map(|i| item_rng(opts.seed, i as u64)).collect();
+    for members in &groups {
+        let t_start = starts[members[0]];
+        let ts = timesteps(t_start, opts.steps);
+        let ancestral = ts.len() == t_start;
+        let b = members.len();
+        let mut x: Vec<f32> = members.iter().flat_map(|&i| inputs[i].iter().copied()).collect();
+        let mut rngs: Vec<_> = members.iter().map(|&i| item_rng(opts.seed, i as u64)).collect();
         if !opts.raw_start {
             let mut z = vec![0f32; TENSOR_LEN];
             for i in 0..b {
@@ -222,17 +257,17 @@ pub fn reverse_diffusion(
                 sched.forward_sample(&x_in, &z, t_start, &mut x[r]);
             }
         }
-        let ctx: Vec<f32> = contexts[start..end].iter().flat_map(|c| c.one_hot()).collect();
+        let ctx: Vec<f32> = members.iter().flat_map(|&i| contexts[i].one_hot()).collect();
         let ctx_t = Tensor::<2>::from_data(TensorData::new(ctx.clone(), [b, CONTEXT_DIM]), &model.device);
         // guidance: one batch of 2b, conditional first, "labels unknown" second
         let ctx_g = (opts.guidance != 0.0).then(|| {
             let mut both = ctx;
-            both.extend(contexts[start..end].iter().flat_map(|c| c.one_hot_unlabelled()));
+            both.extend(members.iter().flat_map(|&i| contexts[i].one_hot_unlabelled()));
             Tensor::<2>::from_data(TensorData::new(both, [2 * b, CONTEXT_DIM]), &model.device)
         });
         if opts.keep_every > 0 {
             for i in 0..b {
-                out.trajectory[start + i].push((t_start, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                out.trajectory[members[i]].push((t_start, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
             }
         }
         let mut next = vec![0f32; x.len()];
@@ -272,7 +307,7 @@ pub fn reverse_diffusion(
                     };
                     sched.reverse_step(&x[r.clone()], &eps[r.clone()], t, noise, &mut next[r.clone()]);
                 } else if opts.clip_margin >= 0.0 {
-                    let boxes = clip_boxes(&contexts[start + i], opts.clip_margin);
+                    let boxes = clip_boxes(&contexts[members[i]], opts.clip_margin);
                     ddim_step_clipped(sched, &x[r.clone()], &eps[r.clone()], t, s, &boxes, &mut next[r.clone()]);
                 } else {
                     sched.ddim_step(&x[r.clone()], &eps[r.clone()], t, s, &mut next[r.clone()]);
@@ -280,7 +315,7 @@ pub fn reverse_diffusion(
             }
             // Known null blocks: a forward sample of x_0 = 0 at the new timestep s.
             for i in 0..b {
-                let ctx = &contexts[start + i];
+                let ctx = &contexts[members[i]];
                 let base = i * TENSOR_LEN;
                 let (sd, shift) = ((1.0 - sched.alpha_bar[s]).sqrt(), sched.qcoef[s]);
                 for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
@@ -302,7 +337,7 @@ pub fn reverse_diffusion(
             calls += 1;
             if opts.keep_every > 0 && ((si + 1) % opts.keep_every == 0 || s == 0) {
                 for i in 0..b {
-                    out.trajectory[start + i].push((s, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
+                    out.trajectory[members[i]].push((s, x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec()));
                 }
             }
         }
@@ -325,7 +360,7 @@ pub fn reverse_diffusion(
                     *v -= (sd / sa * eps[k] as f64) as f32;
                 }
                 for i in 0..b {
-                    let ctx = &contexts[start + i];
+                    let ctx = &contexts[members[i]];
                     for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
                         for p in 0..POINTS_PER_CELL {
                             let (r, col) = slot(n, p);
@@ -338,7 +373,7 @@ pub fn reverse_diffusion(
             }
         }
         for i in 0..b {
-            out.tensors.push(x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec());
+            out.tensors[members[i]] = x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec();
         }
     }
     check_progress(progress, 1.0, "reverse diffusion")?;

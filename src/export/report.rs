@@ -102,6 +102,7 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
             "labels": cand.labels.to_vec(),
             "names": cand.context.names(),
             "source": r.polycube.source,
+            "generator": r.polycube.generator,
             "candidates": r.polycube.candidates.len(),
             "verified": r.polycube.verified().count(),
             // candidates that went through the diffusion (the others were refused
