@@ -35,6 +35,10 @@ pub struct EvalArgs {
     /// Reverse diffusion starts at this step from the forward-noised input (0 = T).
     #[arg(long)]
     pub start_step: Option<usize>,
+    /// Start the reverse process at this noise level in cell units instead of a
+    /// fixed step (SamplerOptions::start_noise).
+    #[arg(long)]
+    pub start_noise: Option<f64>,
     /// Classifier-free guidance weight (SamplerOptions::guidance; 0 = off).
     #[arg(long)]
     pub guidance: Option<f64>,
@@ -75,6 +79,9 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     }
     if let Some(t) = a.start_step {
         opts.sampler.start_step = t;
+    }
+    if let Some(v) = a.start_noise {
+        opts.sampler.start_noise = Some(v);
     }
     if let Some(w) = a.guidance {
         opts.sampler.guidance = w;

@@ -43,6 +43,10 @@ pub struct PolycubeArgs {
     /// Reverse diffusion starts at this step from the forward-noised input (0 = T; default: the library's default).
     #[arg(long)]
     pub start_step: Option<usize>,
+    /// Start the reverse process at this noise level in cell units instead of a
+    /// fixed step (SamplerOptions::start_noise).
+    #[arg(long)]
+    pub start_noise: Option<f64>,
     /// Classifier-free guidance weight (0 = off; default: the library's default).
     #[arg(long)]
     pub guidance: Option<f64>,
@@ -100,6 +104,9 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     }
     if let Some(s) = a.start_step {
         o.sampler.start_step = s;
+    }
+    if let Some(v) = a.start_noise {
+        o.sampler.start_noise = Some(v);
     }
     if let Some(w) = a.guidance {
         o.sampler.guidance = w;
