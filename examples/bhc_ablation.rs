@@ -8,7 +8,7 @@ use sddpm::context::generate::{generate_from_contexts, PolycubeOptions};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
-use sddpm::polycube::dataset::item_rng;
+use sddpm::geometry::rng::seeded_rng;
 use sddpm::polycube::synthetic::{synthetic_mesh, SyntheticOptions};
 use sddpm::verify::{active_points, chamfer};
 
@@ -24,7 +24,7 @@ fn main() {
     let mut sums = [[0.0f64; 2]; 2];
     let mut counts = [0usize; 2];
     for i in 0..n {
-        let mut rng = item_rng(2024, i as u64);
+        let mut rng = seeded_rng(2024, i as u64);
         let mesh = synthetic_mesh(&truth, &SyntheticOptions::default(), &mut rng);
         for (k, (_, ctx)) in labels.iter().enumerate() {
             // diffuse whatever the pre-check thinks of the label (that is the ablation)

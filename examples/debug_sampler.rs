@@ -2,7 +2,8 @@ use sddpm::context::Context;
 use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
-use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{context_frame, sample_cells};
 use sddpm::polycube::tensor::{layout, unlayout, TENSOR_LEN};
 use sddpm::verify::{chamfer, verify, VerifyOptions};
 use rand_distr::{Distribution, StandardNormal};
@@ -13,7 +14,7 @@ fn main() {
     let start_step: usize = args.get(4).map(|v| v.parse().unwrap()).unwrap_or(0);
     let raw = args.get(5).is_some();
     let ctx = Context::parse(&args[3]).unwrap();
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     let exact = sample_cells(&ctx, 1.0, &mut rng);
     let x0 = layout(&exact);
     let s = &model.schedule;

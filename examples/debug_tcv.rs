@@ -4,7 +4,8 @@ use sddpm::context::Context;
 use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
-use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{context_frame, sample_cells};
 use sddpm::polycube::tensor::layout;
 use sddpm::polycube::Primitive;
 use sddpm::verify::{active_points, cached_templates, chamfer, local_points, pcd};
@@ -16,7 +17,7 @@ fn main() {
     let start_step: usize = args.get(4).map(|v| v.parse().unwrap()).unwrap_or(0);
     let refine_passes: usize = args.get(5).map(|v| v.parse().unwrap()).unwrap_or(0);
     let refine_t: usize = args.get(6).map(|v| v.parse().unwrap()).unwrap_or(20);
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     let exact = sample_cells(&ctx, 1.0, &mut rng);
     let x0 = layout(&exact);
     let frame = context_frame(&ctx).unwrap();

@@ -6,7 +6,8 @@ use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 use sddpm::diffusion::model::prior_image;
 use sddpm::diffusion::{Backend, Model};
-use sddpm::polycube::dataset::{generate, item_rng, DatasetConfig};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{generate, DatasetConfig};
 use sddpm::polycube::tensor::{flat, slot, POINTS_PER_CELL, TENSOR_H, TENSOR_LEN, TENSOR_W};
 use sddpm::polycube::{Primitive, NUM_CELLS};
 
@@ -16,7 +17,7 @@ fn main() {
     let n: usize = args.get(2).map(|v| v.parse().unwrap()).unwrap_or(8);
     let sigmas = [(0.01f64, 4.0f64), (0.01, 12.0), (0.01, 32.0), (0.01, 1e9)];
     let data = generate(&DatasetConfig::default());
-    let mut rng = item_rng(78, 0);
+    let mut rng = seeded_rng(78, 0);
     let idx: Vec<usize> = (0..n).map(|i| (i * 7919 + 13) % data.len()).collect();
     let sch = &model.schedule;
     println!("t  mse_net  | per sigma: mse_kernel g* mse_blend");

@@ -9,7 +9,8 @@ use rand_distr::{Distribution, StandardNormal};
 use sddpm::context::Context;
 use sddpm::diffusion::model::prior_image;
 use sddpm::diffusion::schedule::{Schedule, ScheduleConfig};
-use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{context_frame, sample_cells};
 use sddpm::polycube::tensor::{flat, layout, slot, TENSOR_LEN};
 use sddpm::verify::{active_points, cached_templates, local_points, pcd, pcd_labels};
 
@@ -18,7 +19,7 @@ fn main() {
     let input_ctx = Context::parse(&args[1]).unwrap();
     let start: usize = args[2].parse().unwrap();
     let sched = Schedule::new(ScheduleConfig::default());
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     // a warped input: x_0 of the input context with a smooth bend
     let warp: f64 = std::env::var("WARP").ok().map(|v| v.parse().unwrap()).unwrap_or(0.0);
     let mut x_in = layout(&sample_cells(&input_ctx, 1.0, &mut rng));

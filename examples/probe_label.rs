@@ -8,7 +8,8 @@ use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
-use sddpm::polycube::dataset::{item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::sample_cells;
 use sddpm::polycube::tensor::{flat, layout, slot, TENSOR_H, TENSOR_LEN, TENSOR_W};
 
 fn bayes(kdraws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: &dyn Fn(usize) -> f64) -> Vec<f64> {
@@ -34,12 +35,12 @@ fn main() {
     let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();
     let ca = Context::parse(&args[2]).unwrap();
     let cb = Context::parse(&args[3]).unwrap();
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     let x0 = layout(&sample_cells(&ca, 1.0, &mut rng));
     let sched = &model.schedule;
     let n = ca.occupied().next().unwrap();
     let hw = TENSOR_H * TENSOR_W;
-    let draws = |c: &Context| -> Vec<Vec<f32>> { (0..300u64).map(|k| { let mut r = item_rng(77, k); layout(&sample_cells(c, 1.0, &mut r)) }).collect() };
+    let draws = |c: &Context| -> Vec<Vec<f32>> { (0..300u64).map(|k| { let mut r = seeded_rng(77, k); layout(&sample_cells(c, 1.0, &mut r)) }).collect() };
     let (da, db) = (draws(&ca), draws(&cb));
     let idx: Vec<usize> = (0..512).flat_map(|p| { let (r, c) = slot(n, p); (0..3).map(move |ch| flat(ch, r, c)) }).collect();
     println!("   t | net: |eA-eB| |eA-z| |eB-z| | bayes: |eA-eB| |eA-z| |eB-z| | cos(net diff, bayes diff)");

@@ -3,7 +3,8 @@
 use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 use sddpm::diffusion::{Backend, Model};
-use sddpm::polycube::dataset::{generate, item_rng, DatasetConfig};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{generate, DatasetConfig};
 use sddpm::polycube::tensor::{slot, flat, TENSOR_H, TENSOR_LEN, TENSOR_W, POINTS_PER_CELL};
 use sddpm::polycube::{Primitive, NUM_CELLS};
 fn main() {
@@ -11,7 +12,7 @@ fn main() {
     let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();
     let n: usize = args.get(2).map(|v| v.parse().unwrap()).unwrap_or(16);
     let data = generate(&DatasetConfig::default());
-    let mut rng = item_rng(77, 0);
+    let mut rng = seeded_rng(77, 0);
     let idx: Vec<usize> = (0..n).map(|i| (i * 7919) % data.len()).collect();
     for &t in &[2usize, 10, 30, 60, 120, 250, 400, 500] {
         let mut se = 0.0;

@@ -4,7 +4,8 @@ use sddpm::context::Context;
 use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
-use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{context_frame, sample_cells};
 use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_W};
 use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
 fn main() {
@@ -13,7 +14,7 @@ fn main() {
     let ctx = Context::parse(&args[2]).unwrap();
     let steps: usize = args[3].parse().unwrap();
     let start: usize = args[4].parse().unwrap();
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     // X0CTX=labels: sample the start cloud from another context (label-use check)
     let x0ctx = std::env::var("X0CTX").ok().map(|c| Context::parse(&c).unwrap()).unwrap_or(ctx.clone());
     let x0 = layout(&sample_cells(&x0ctx, 1.0, &mut rng));

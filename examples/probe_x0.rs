@@ -4,14 +4,15 @@ use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
-use sddpm::polycube::dataset::{context_frame, item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::{context_frame, sample_cells};
 use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_LEN, TENSOR_W};
 use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();
     let ctx = Context::parse(&args[2]).unwrap();
-    let mut rng = item_rng(5, 5);
+    let mut rng = seeded_rng(5, 5);
     let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
     let frame = context_frame(&ctx).unwrap();
     let tpl = cached_templates(2048);
@@ -32,7 +33,7 @@ fn main() {
         let mse: f64 = (0..512).flat_map(|p| { let (r, c) = sddpm::polycube::tensor::slot(n, p); (0..3).map(move |ch| sddpm::polycube::tensor::flat(ch, r, c)) }).map(|k| (eps[k] - z[k]).powi(2) as f64).sum::<f64>() / (3.0 * 512.0);
         // Bayes-optimal eps from K independent samplings of the same context (the p-th
         // sorted point of each is a draw from p(x0 | rank p)).
-        let kdraws: Vec<Vec<f32>> = (0..300u64).map(|k| { let mut r = item_rng(77, k); layout(&sample_cells(&ctx, 1.0, &mut r)) }).collect();
+        let kdraws: Vec<Vec<f32>> = (0..300u64).map(|k| { let mut r = seeded_rng(77, k); layout(&sample_cells(&ctx, 1.0, &mut r)) }).collect();
         let mut bmse = 0.0;
         for p in 0..512 {
             let (r, c) = sddpm::polycube::tensor::slot(n, p);

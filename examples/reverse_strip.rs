@@ -8,7 +8,8 @@ use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
 use sddpm::export::render::{render, Camera, Canvas, Layer};
-use sddpm::polycube::dataset::{item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use sddpm::polycube::NUM_CELLS;
 use sddpm::verify::active_points;
@@ -36,7 +37,7 @@ fn main() {
         Some(p) => Model::from_file(std::path::Path::new(p), Backend::Flex).unwrap(),
         None => Model::default_model().unwrap(),
     };
-    let mut rng = item_rng(7, 0);
+    let mut rng = seeded_rng(7, 0);
     let x0 = layout(&sample_cells(&ctx, 1.0, &mut rng));
     let (w, h) = (220usize, 220usize);
     let frames = 6;

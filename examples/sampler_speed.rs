@@ -6,7 +6,8 @@ use sddpm::context::Context;
 use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
-use sddpm::polycube::dataset::{item_rng, sample_cells};
+use sddpm::geometry::rng::seeded_rng;
+use sddpm::polycube::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use std::time::Instant;
 
@@ -22,7 +23,7 @@ fn main() -> sddpm::Result<()> {
                     if gate.is_none() && steps == 0 {
                         continue; // the U-Net's full sampler: 10x its strided time
                     }
-                    let inputs: Vec<Vec<f32>> = (0..n).map(|i| layout(&sample_cells(&ctx, 1.0, &mut item_rng(9, i as u64)))).collect();
+                    let inputs: Vec<Vec<f32>> = (0..n).map(|i| layout(&sample_cells(&ctx, 1.0, &mut seeded_rng(9, i as u64)))).collect();
                     let ctxs = vec![ctx; n];
                     let d = SamplerOptions::default();
                     // the full sampler: every one of the T steps from T

@@ -353,7 +353,9 @@ fn prepare_candidate_input(
     }
     let Some(input) = prepared.as_ref() else { return false };
     let c = &pr.candidates[i];
-    let mut rng = crate::polycube::dataset::item_rng(opts.seed ^ 0x9e37, 0xfa11);
+    const RELAYOUT_SEED: u64 = 0x9e37;
+    const RELAYOUT_STREAM: u64 = 0xfa11;
+    let mut rng = crate::geometry::rng::seeded_rng(opts.seed ^ RELAYOUT_SEED, RELAYOUT_STREAM);
     match crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
         Ok(inp) => {
             pr.candidates[i].input = Some(inp);

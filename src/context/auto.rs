@@ -28,7 +28,7 @@ use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
 use crate::geometry::SurfaceSample;
 use crate::mesh::TriMesh;
-use crate::polycube::dataset::item_rng;
+use crate::geometry::rng::seeded_rng;
 use crate::polycube::orientation::AxisRotation;
 use crate::polycube::{Family, Primitive, NUM_CELLS};
 use rand::RngExt;
@@ -192,7 +192,7 @@ fn subregion_samples(input: &PreparedInput, vol: &VoxelVolume, sub: &Subregion, 
     let inside = |p: [f64; 3]| (0..3).all(|a| p[a] >= sub.lo[a] - eps && p[a] <= sub.hi[a] + eps);
     let mut v: Vec<SurfaceSample> = input.samples.iter().filter(|s| inside(s.point)).copied().collect();
     let area_per_sample = input.area / input.samples.len().max(1) as f64;
-    let mut rng = item_rng(seed, sub.cell as u64);
+    let mut rng = seeded_rng(seed, sub.cell as u64);
     let g = &vol.grid;
     for a in 0..3 {
         for (plane, is_cut) in [(sub.lo[a], sub.lo[a] > bb_lo[a] + eps), (sub.hi[a], sub.hi[a] < bb_hi[a] - eps)] {

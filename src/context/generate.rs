@@ -10,7 +10,7 @@ use crate::error::{check_progress, Error, Progress, Result};
 use crate::geometry::orient::{align_axes, FrameChoice};
 use crate::geometry::{sample_surface, Alignment, SurfaceSample};
 use crate::mesh::TriMesh;
-use crate::polycube::dataset::item_rng;
+use crate::geometry::rng::seeded_rng;
 use crate::polycube::inference::{occupancy_only, prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
 use crate::polycube::orientation::{rotations, AxisRotation};
 use crate::polycube::tensor::{unlayout, POINTS_PER_CELL};
@@ -303,7 +303,8 @@ pub struct PreparedInput {
 
 pub fn prepare_input(mesh: &TriMesh, opts: &PolycubeOptions) -> Result<PreparedInput> {
     let (alignment, frame) = align_axes(mesh)?;
-    let mut rng = item_rng(opts.seed, 0x5a3f);
+    const INPUT_SAMPLES_STREAM: u64 = 0x5a3f;
+    let mut rng = seeded_rng(opts.seed, INPUT_SAMPLES_STREAM);
     let samples = sample_surface(&alignment.mesh, opts.oversampling.max(POINTS_PER_CELL), &mut rng);
     if samples.is_empty() {
         return Err(Error::InvalidMesh("the surface has no area to sample".into()));
@@ -385,7 +386,8 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
 pub fn lay_out(input: &PreparedInput, cands: &mut [Candidate], opts: &PolycubeOptions) -> Result<()> {
     for c in cands.iter_mut().filter(|c| c.stage == Stage::Pending && c.input.is_none()) {
         let k = rotations().iter().position(|r| *r == c.axis_rotation).unwrap_or(0);
-        let mut rng = item_rng(opts.seed ^ 0x9e37, k as u64);
+        const LAYOUT_SEED: u64 = 0x9e37;
+        let mut rng = seeded_rng(opts.seed ^ LAYOUT_SEED, k as u64);
         let t = prepare(&input.samples, &c.context, c.axis_rotation, opts.min_occupied_fraction, &mut rng)?;
         c.occupancy = t.occupancy.clone();
         c.input = Some(t);
@@ -436,7 +438,8 @@ pub fn polycube_samples(ctx: &Context, n: usize) -> Vec<([f64; 3], usize)> {
     if q.quads.is_empty() {
         return Vec::new();
     }
-    let mut rng = item_rng(0xf17, ctx.occupancy_mask() as u64);
+    const POLYCUBE_SAMPLES_SEED: u64 = 0xf17;
+    let mut rng = seeded_rng(POLYCUBE_SAMPLES_SEED, ctx.occupancy_mask() as u64);
     use rand::RngExt;
     (0..n)
         .map(|_| {

@@ -7,12 +7,16 @@ use super::Model;
 use crate::context::generate::{generate_from_contexts, Candidate, PolycubeOptions, Stage};
 use crate::context::Context;
 use crate::error::{NoProgress, Result};
-use crate::polycube::dataset::{item_rng, sample_cells};
+use crate::geometry::rng::seeded_rng;
+use crate::polycube::dataset::sample_cells;
 use crate::polycube::synthetic::{cases, SyntheticOptions};
 use crate::polycube::tensor::unlayout;
 use crate::polycube::{Primitive, NUM_CELLS};
 use crate::verify::chamfer;
 use serde::Serialize;
+
+/// Seed mixer of the exact polycube's samples a case's output is compared with.
+const EXACT_SAMPLES_STREAM: u64 = 0xc0ffee;
 
 /// Per-category Chamfer statistics.
 #[derive(Debug, Clone, Default, Serialize)]
@@ -63,7 +67,8 @@ pub struct EvalSummary {
 pub fn wrong_context(ctx: &Context, k: u64) -> Option<Context> {
     let g = ctx.validity().genus?;
     let occupied: Vec<usize> = ctx.occupied().collect();
-    let mut rng = item_rng(0xbad, k);
+    const WRONG_CONTEXT_SEED: u64 = 0xbad;
+    let mut rng = seeded_rng(WRONG_CONTEXT_SEED, k);
     use rand::RngExt;
     for _ in 0..50 {
         let n = occupied[rng.random_range(0..occupied.len())];
@@ -113,7 +118,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
             }
         }
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
-            let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
+            let mut rng = seeded_rng(seed ^ EXACT_SAMPLES_STREAM, i as u64);
             // the exact polycube's surface per cell: with the visible prior (asked for,
             // or the retry's) the output carries no shared faces, and neither does the
             // assembled surface
@@ -372,7 +377,7 @@ pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: 
         return Err(crate::error::Error::InvalidArgument("the label probe takes two single-cell contexts on the same cell".into()));
     }
     let draws = |c: &Context, s: u64| -> Vec<Vec<f32>> {
-        (0..300u64).map(|k| layout(&sample_cells(c, 1.0, &mut item_rng(s, k)))).collect()
+        (0..300u64).map(|k| layout(&sample_cells(c, 1.0, &mut seeded_rng(s, k)))).collect()
     };
     let (da, db) = (draws(a, seed ^ 0xa), draws(b, seed ^ 0xb));
     let sched = &model.schedule;
@@ -389,7 +394,8 @@ pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: 
     for &t in ts {
         let (mut dm, mut dbay, mut dot, mut em, mut eb) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for trial in 0..trials {
-            let mut rng = item_rng(seed ^ 0x9e0b, (t * 1000 + trial) as u64);
+            const PROBE_STREAM: u64 = 0x9e0b;
+            let mut rng = seeded_rng(seed ^ PROBE_STREAM, (t * 1000 + trial) as u64);
             let x0 = layout(&sample_cells(a, 1.0, &mut rng));
             let z: Vec<f32> = (0..TENSOR_LEN).map(|_| StandardNormal.sample(&mut rng)).collect();
             let mut xt = vec![0f32; TENSOR_LEN];
@@ -471,7 +477,7 @@ pub fn generator_eval(model: &Model, seed: u64, n: usize, min: usize, max: usize
         }
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
             let (o, x) = (unlayout(out), unlayout(&inp.tensor));
-            let mut rng = item_rng(seed ^ 0xc0ffee, i as u64);
+            let mut rng = seeded_rng(seed ^ EXACT_SAMPLES_STREAM, i as u64);
             let exact = if opts.verify.visible_coverage { crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng) } else { sample_cells(&ctx, 1.0, &mut rng) };
             let s = 1.0 / inp.frame.scale;
             for k in ctx.occupied() {

@@ -663,7 +663,7 @@ fn prior_image_of(one_hot: &[f32], visible: bool) -> Vec<f32> {
         }
     }
     let ctx = crate::context::Context { labels };
-    let mut rng = crate::polycube::dataset::item_rng(PRIOR_SEED, 0);
+    let mut rng = crate::geometry::rng::seeded_rng(PRIOR_SEED, 0);
     let mut cells = if visible {
         crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
     } else {

@@ -15,7 +15,7 @@
 use super::Model;
 use crate::context::Context;
 use crate::error::{check_progress, Error, Progress, Result};
-use crate::polycube::dataset::item_rng;
+use crate::geometry::rng::seeded_rng;
 use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
 use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL};
 use crate::polycube::{Primitive, CONTEXT_DIM, NUM_CELLS};
@@ -245,7 +245,7 @@ pub fn reverse_diffusion(
         let ancestral = ts.len() == t_start;
         let b = members.len();
         let mut x: Vec<f32> = members.iter().flat_map(|&i| inputs[i].iter().copied()).collect();
-        let mut rngs: Vec<_> = members.iter().map(|&i| item_rng(opts.seed, i as u64)).collect();
+        let mut rngs: Vec<_> = members.iter().map(|&i| seeded_rng(opts.seed, i as u64)).collect();
         if !opts.raw_start {
             let mut z = vec![0f32; TENSOR_LEN];
             for i in 0..b {

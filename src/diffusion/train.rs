@@ -11,7 +11,8 @@ use super::schedule::{Schedule, ScheduleConfig};
 use super::weights::{self, TrainingInfo, WeightsMeta};
 use super::{device, load_net, net_bytes, Backend};
 use crate::error::{Error, Result};
-use crate::polycube::dataset::{generate, item_rng, DatasetConfig, Sample};
+use crate::geometry::rng::seeded_rng;
+use crate::polycube::dataset::{generate, DatasetConfig, Sample};
 use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
 use crate::polycube::CONTEXT_DIM;
 use burn::optim::grad_clipping::GradientClippingConfig;
@@ -23,6 +24,11 @@ use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// Seed mixers of the random streams of training: the epoch's shuffle (stream =
+/// epoch) and the step's timesteps and noise (stream = step).
+const SHUFFLE_STREAM: u64 = 0x5348_5546;
+const NOISE_STREAM: u64 = 0x4e4f_4953;
 
 /// Everything a training run depends on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -296,14 +302,14 @@ fn train_loop(
     let mut meta = meta_for(cfg, *epoch0, *step, *last_loss, *seconds0);
     for epoch in *epoch0..cfg.epochs {
         let mut perm: Vec<usize> = (0..data.len()).collect();
-        let mut rng = item_rng(cfg.seed ^ 0x5348_5546, epoch as u64);
+        let mut rng = seeded_rng(cfg.seed ^ SHUFFLE_STREAM, epoch as u64);
         for i in (1..perm.len()).rev() {
             let j = rng.random_range(0..=i);
             perm.swap(i, j);
         }
         for chunk in perm.chunks(bs) {
             let b = chunk.len();
-            let mut srng = item_rng(cfg.seed ^ 0x4e4f_4953, *step as u64);
+            let mut srng = seeded_rng(cfg.seed ^ NOISE_STREAM, *step as u64);
             let mut x0 = Vec::with_capacity(b * TENSOR_LEN);
             let mut ctx = Vec::with_capacity(b * CONTEXT_DIM);
             for &i in chunk {

@@ -24,7 +24,8 @@ use super::train::{adam, checkpoint_files, io, meta_for, CheckpointState, LossRe
 use super::weights::{self, WeightsMeta};
 use super::{device, fresh_field, load_module, module_bytes, Backend};
 use crate::error::{Error, Result};
-use crate::polycube::dataset::{generate, item_rng};
+use crate::geometry::rng::seeded_rng;
+use crate::polycube::dataset::generate;
 use crate::polycube::tensor::{unlayout, POINTS_PER_CELL};
 use crate::polycube::Primitive;
 use burn::optim::GradientsParams;
@@ -131,13 +132,13 @@ pub fn train_field(requested: &TrainConfig, out: &Path, resume: Option<&Path>, o
     let mut meta = meta_for(&cfg, epoch0, step, last_loss, seconds0);
     for epoch in epoch0..cfg.epochs {
         let mut perm: Vec<usize> = (0..cells.len()).collect();
-        let mut rng = item_rng(cfg.seed ^ SHUFFLE_STREAM, epoch as u64);
+        let mut rng = seeded_rng(cfg.seed ^ SHUFFLE_STREAM, epoch as u64);
         for i in (1..perm.len()).rev() {
             let j = rng.random_range(0..=i);
             perm.swap(i, j);
         }
         for chunk in perm.chunks(bs) {
-            let mut srng = item_rng(cfg.seed ^ STEP_STREAM, step as u64);
+            let mut srng = seeded_rng(cfg.seed ^ STEP_STREAM, step as u64);
             let (batch, target) = noisy_batch(chunk.iter().map(|&i| &cells[i]), &fc, &levels, &cfg, &mut srng);
             let c = batch.cells();
             let (f, nz, lb) = batch.tensors(&ad);
@@ -257,7 +258,7 @@ mod tests {
     fn timesteps_are_log_uniform_in_noise_level() {
         let sched = Schedule::new(Default::default());
         let levels = noise_levels(&sched);
-        let mut rng = item_rng(1, 2);
+        let mut rng = seeded_rng(1, 2);
         let ts: Vec<usize> = (0..20000).map(|_| draw_timestep(&mut rng, &levels)).collect();
         assert!(ts.iter().all(|&t| (1..=500).contains(&t)));
         // the median noise level is the geometric mean of the range's ends

@@ -20,6 +20,7 @@
 
 pub mod bvh;
 pub mod orient;
+pub mod rng;
 pub(crate) mod union_find;
 pub mod vec3;
 

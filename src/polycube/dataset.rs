@@ -13,7 +13,8 @@ use super::assembly::{boundary, occupied_cell_box, single};
 use super::primitive::{cell_coords, Primitive, NUM_CELLS};
 use super::tensor::{layout, sort_order, BoxFrame, POINTS_PER_CELL};
 use crate::context::{valid_cube_occupancies, Context};
-use rand::{RngExt, SeedableRng};
+use crate::geometry::rng::seeded_rng;
+use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -41,15 +42,6 @@ pub struct Sample {
     pub scale: f32,
     /// [3, 64, 96] tensor.
     pub tensor: Vec<f32>,
-}
-
-/// A per-item generator derived from a seed and an index (SplitMix64 mixing).
-pub fn item_rng(seed: u64, index: u64) -> ChaCha8Rng {
-    let mut z = seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    ChaCha8Rng::seed_from_u64(z)
 }
 
 /// Boundary quads of each standalone primitive in cell-local coordinates [0,1]^3
@@ -168,7 +160,9 @@ pub fn contexts(cfg: &DatasetConfig) -> Vec<Context> {
     let by_size: Vec<Vec<u16>> = (0..=NUM_CELLS)
         .map(|m| (1u16..4096).filter(|&mask| valid[mask as usize] && mask.count_ones() as usize == m).collect())
         .collect();
-    let mut rng = item_rng(cfg.seed, u64::MAX);
+    // the random assemblies draw from one stream past every per-sample one
+    const RANDOM_ASSEMBLY_STREAM: u64 = u64::MAX;
+    let mut rng = seeded_rng(cfg.seed, RANDOM_ASSEMBLY_STREAM);
     for _ in 0..cfg.random {
         let m = rng.random_range(1..=11usize);
         let masks = &by_size[m];
@@ -190,7 +184,7 @@ pub fn generate(cfg: &DatasetConfig) -> Vec<Sample> {
     ctxs.par_iter()
         .enumerate()
         .map(|(i, ctx)| {
-            let mut rng = item_rng(cfg.seed, i as u64);
+            let mut rng = seeded_rng(cfg.seed, i as u64);
             let s = 1.0 + cfg.scale_jitter * (2.0 * rng.random::<f64>() - 1.0);
             let cells = sample_cells(ctx, s, &mut rng);
             Sample { context: *ctx, scale: s as f32, tensor: layout(&cells) }

@@ -244,7 +244,7 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 mod tests {
     use super::*;
     use crate::geometry::sample_surface;
-    use crate::polycube::dataset::item_rng;
+    use crate::geometry::rng::seeded_rng;
     use crate::polycube::tensor::{unlayout, TENSOR_LEN};
     use crate::polycube::{assemble, boundary};
 
@@ -257,7 +257,7 @@ mod tests {
         for v in m.vertices.iter_mut() {
             *v = frame.to_normalised(*v);
         }
-        let mut rng = item_rng(1, 0);
+        let mut rng = seeded_rng(1, 0);
         let samples = sample_surface(&m, DEFAULT_OVERSAMPLING, &mut rng);
         let inp = prepare(&samples, &ctx, AxisRotation::IDENTITY, 0.25, &mut rng).unwrap();
         assert_eq!(inp.tensor.len(), TENSOR_LEN);

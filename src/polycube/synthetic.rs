@@ -5,7 +5,7 @@
 //! normalised primitive samples).
 
 use super::assembly::{assemble, boundary, check};
-use super::dataset::item_rng;
+use crate::geometry::rng::seeded_rng;
 use super::primitive::{Primitive, NUM_CELLS};
 use crate::context::{valid_cube_occupancies, Context};
 use crate::mesh::TriMesh;
@@ -156,7 +156,7 @@ pub const GROUPS: [(&str, usize, usize); 3] = [("simple", 1, 3), ("medium", 4, 6
 pub fn cases(seed: u64, n: usize, min: usize, max: usize, opts: &SyntheticOptions) -> Vec<(Context, TriMesh)> {
     (0..n)
         .map(|i| {
-            let mut rng = item_rng(seed, i as u64);
+            let mut rng = seeded_rng(seed, i as u64);
             let ctx = random_valid_context(&mut rng, min, max);
             let m = synthetic_mesh(&ctx, opts, &mut rng);
             (ctx, m)
