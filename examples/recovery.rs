@@ -125,7 +125,7 @@ fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOpt
 /// RECOVERY_DUMP=FILE: appends one JSON line per automated candidate (group, case,
 /// context, stage, score, whether it is the truth, its per-cell geometric fits and
 /// per-cell target PCD and nearest-other-template PCD), for studying rankings offline.
-fn dump_candidates(path: &std::path::Path, group: &str, case: usize, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, truth_solid: &sddpm::polycube::VoxelGrid) -> sddpm::Result<()> {
+fn dump_candidates(path: &std::path::Path, group: &str, case: usize, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, truth_solid: &sddpm::geometry::VoxelGrid) -> sddpm::Result<()> {
     use sddpm::context::generate::{fit_score_cells, polycube_samples, prepare_input, FIT_SAMPLES};
     use std::io::Write as _;
     let input = prepare_input(mesh, popts)?;

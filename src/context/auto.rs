@@ -1,6 +1,7 @@
 //! The automated mode: genus-guided context generation.
 //!
-//! 1. The temporary volume of the aligned input ([`super::volume`]).
+//! 1. The temporary volume of the aligned input ([`crate::geometry::voxel`]), split
+//!    into subregions ([`subregions`]), each with its genus.
 //! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
 //!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
 //!    aligned bounding box into subregions, measure each one's genus, and take its
@@ -22,11 +23,11 @@ use super::generate::{
     diffuse_and_verify, finish, lay_out, fit_score_cells, fit_score_scaled, limit_fit, polycube_samples, precheck, worst_and_mean, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
-use super::volume::{split_points, subregions, voxelize, Subregion, VoxelVolume};
 use super::Context;
 use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
-use crate::geometry::SurfaceSample;
+use crate::geometry::voxel::{betti, voxelize, VoxelVolume};
+use crate::geometry::{SurfaceSample, VoxelGrid};
 use crate::mesh::TriMesh;
 use crate::geometry::rng::seeded_rng;
 use crate::polycube::orientation::AxisRotation;
@@ -34,6 +35,79 @@ use crate::polycube::{Family, Primitive, NUM_CELLS};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
+
+/// What the automated mode measured for one subregion.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Subregion {
+    /// Cell index of the subregion in the grid.
+    pub cell: usize,
+    /// Box in the aligned frame.
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    /// Fraction of the subregion box that is solid.
+    pub fill: f64,
+    /// Solid components (26-connected), sealed cavities, tunnels (genus).
+    pub components: usize,
+    pub cavities: usize,
+    pub genus: i64,
+    /// The subregion is (almost) empty: label null.
+    pub empty: bool,
+}
+
+/// Split points of one axis from ratios (fractions summing to 1).
+pub fn split_points(lo: f64, hi: f64, ratios: &[f64]) -> Vec<f64> {
+    let total: f64 = ratios.iter().sum();
+    let mut v = vec![lo];
+    let mut acc = 0.0;
+    for r in ratios {
+        acc += r / total;
+        v.push(lo + acc * (hi - lo));
+    }
+    *v.last_mut().unwrap() = hi;
+    v
+}
+
+/// Analyse the subregions of a volume split at `xs`, `ys`, `zs` (split points along each axis).
+pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
+    let mut out = Vec::new();
+    let [nx, ny, nz] = vol.grid.dims;
+    for (k, zw) in zs.windows(2).enumerate() {
+        for (j, yw) in ys.windows(2).enumerate() {
+            for (i, xw) in xs.windows(2).enumerate() {
+                let lo = [xw[0], yw[0], zw[0]];
+                let hi = [xw[1], yw[1], zw[1]];
+                let r = |a: usize, v: f64, n: usize| (((v - vol.lo[a]) / vol.h).round().max(0.0) as usize).min(n);
+                let (x0, x1) = (r(0, lo[0], nx), r(0, hi[0], nx));
+                let (y0, y1) = (r(1, lo[1], ny), r(1, hi[1], ny));
+                let (z0, z1) = (r(2, lo[2], nz), r(2, hi[2], nz));
+                let dims = [x1.saturating_sub(x0).max(1), y1.saturating_sub(y0).max(1), z1.saturating_sub(z0).max(1)];
+                let mut g = VoxelGrid::empty(dims);
+                for z in z0..z1 {
+                    for y in y0..y1 {
+                        for x in x0..x1 {
+                            let v = vol.grid.occ[vol.grid.idx(x, y, z)];
+                            let ix = g.idx(x - x0, y - y0, z - z0);
+                            g.occ[ix] = v;
+                        }
+                    }
+                }
+                let fill = g.count() as f64 / g.occ.len() as f64;
+                let (b0, b2, b1) = betti(&g);
+                out.push(Subregion {
+                    cell: crate::polycube::cell_index(i, j, k),
+                    lo,
+                    hi,
+                    fill,
+                    components: b0,
+                    cavities: b2,
+                    genus: b1,
+                    empty: fill < min_fill,
+                });
+            }
+        }
+    }
+    out
+}
 
 /// Splitting ratios: fractions of the aligned bounding box along X (up to 3 parts),
 /// Y (up to 2) and Z (up to 2).

@@ -4,10 +4,10 @@
 
 pub mod auto;
 pub mod generate;
-pub mod volume;
 
 use crate::error::{Error, Result};
-use crate::polycube::assembly::{assemble, check, VoxelGrid, Validity};
+use crate::geometry::VoxelGrid;
+use crate::polycube::assembly::{assemble, check, Validity};
 use crate::polycube::primitive::{cell_coords, Family, Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -475,6 +475,19 @@ pub fn valid_cube_occupancies() -> &'static [bool; 4096] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn congruence_up_to_rotation_and_translation() {
+        use crate::polycube::assembly::congruent;
+        let a = Context::parse("BHC+X,0,0,0,0,0,0,0,0,0,0,0").unwrap().assemble();
+        let b = Context::parse("0,0,0,0,0,0,0,0,0,0,0,BHC-Z").unwrap().assemble();
+        assert!(congruent(&a, &b));
+        let c = Context::parse("0,0,0,0,0,0,0,0,0,0,0,THC+Z").unwrap().assemble();
+        assert!(!congruent(&a, &c));
+        let l1 = Context::parse("cube,cube,0,cube,0,0,0,0,0,0,0,0").unwrap().assemble();
+        let l2 = Context::parse("0,cube,cube,0,0,cube,0,0,0,0,0,0").unwrap().assemble();
+        assert!(congruent(&l1, &l2));
+    }
 
     #[test]
     fn a_rotated_context_assembles_the_same_solid_turned() {

@@ -3,7 +3,7 @@
 //! self-intersection test and for closest-point queries.
 
 use super::vec3::*;
-use crate::mesh::TriMesh;
+use super::TriMesh;
 
 /// Axis-aligned box.
 #[derive(Debug, Clone, Copy, PartialEq)]

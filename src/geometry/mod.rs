@@ -1,6 +1,8 @@
-//! Geometry shared by every stage: PCA alignment with centring and
-//! normalisation (and the transform back to user coordinates), area-uniform
-//! surface sampling, a triangle BVH and closest-point queries.
+//! Geometry shared by every stage, the lowest one after `error`: the triangle mesh
+//! type ([`TriMesh`]), voxel sets and the voxeliser ([`voxel`]), the seeded random
+//! streams ([`rng`]), PCA alignment with centring and normalisation (and the
+//! transform back to user coordinates), area-uniform surface sampling, a triangle
+//! BVH and closest-point queries.
 //!
 //! Alignment (docs/mesh-checks.md has the same in prose):
 //! 1. Surface moments are area-weighted integrals over the triangles (exact for
@@ -21,14 +23,17 @@
 pub mod bvh;
 pub mod orient;
 pub mod rng;
+pub mod trimesh;
 pub(crate) mod union_find;
 pub mod vec3;
+pub mod voxel;
 
 pub use bvh::{closest_point_on_triangle, Aabb, Bvh, ClosestPoint, SurfaceLocator};
+pub use trimesh::TriMesh;
+pub use voxel::VoxelGrid;
 pub(crate) use union_find::UnionFind;
 
 use crate::error::{Error, Result};
-use crate::mesh::TriMesh;
 use nalgebra::{Matrix3, SymmetricEigen};
 use vec3::*;
 

@@ -16,7 +16,7 @@
 use super::vec3::*;
 use super::{principal_axes, third_moment, Aabb, Alignment, Transform, SKEW_TIE};
 use crate::error::{Error, Result};
-use crate::mesh::TriMesh;
+use super::TriMesh;
 use serde::Serialize;
 
 /// Alignment strength above which the normal-aligned frame replaces PCA.
@@ -171,14 +171,13 @@ pub fn align_axes(mesh: &TriMesh) -> Result<(Alignment, FrameChoice)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::context::Context;
-    use crate::polycube::{assemble, boundary};
+    use crate::geometry::trimesh::tests::voxels;
 
     #[test]
     fn tilted_l_shape_gets_its_faces_back_on_the_axes() {
-        // An L of three cubes: its principal axes are tilted, its faces are not.
-        let ctx = Context::parse("cube,cube,cube,cube,0,0,0,0,0,0,0,0").unwrap();
-        let m = boundary(&assemble(&ctx.labels)).to_trimesh();
+        // An L of four cubes (three along X, one more along Y): its principal axes
+        // are tilted, its faces are not.
+        let m = voxels([3, 2, 1], |x, y, _| y == 0 || x == 0);
         let r = matmul(matmul(rot_axis(0, 0.4), rot_axis(1, -0.7)), rot_axis(2, 1.1));
         let tilted = TriMesh { vertices: m.vertices.iter().map(|&p| [dot(r[0], p), dot(r[1], p), dot(r[2], p)]).collect(), triangles: m.triangles.clone() };
         let (al, choice) = align_axes(&tilted).unwrap();

@@ -1,5 +1,4 @@
 use super::*;
-use crate::mesh::TriMesh;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -33,7 +32,7 @@ fn rotate(m: &TriMesh, r: [[f64; 3]; 3]) -> TriMesh {
 
 /// An asymmetric solid: a 4 x 2 x 1 box with a small box on one end (an "L").
 fn ell() -> TriMesh {
-    crate::mesh::tests::voxels([4, 2, 2], |x, y, z| z == 0 || (x == 0 && y == 0))
+    super::trimesh::tests::voxels([4, 2, 2], |x, y, z| z == 0 || (x == 0 && y == 0))
 }
 
 #[test]

@@ -8,7 +8,7 @@
 
 use super::HexMesh;
 use crate::polycube::primitive::SUB;
-use crate::polycube::VoxelGrid;
+use crate::geometry::VoxelGrid;
 
 /// A polycube hex mesh at one subdivision level, with its lattice bookkeeping.
 #[derive(Debug, Clone)]

@@ -86,10 +86,10 @@ pub fn axis_planes(mesh: &TriMesh) -> (Vec<AxisPlane>, f64) {
 }
 
 impl LatticePlanes {
-    /// The uniform lattice of `crate::context::volume::voxelize`: `resolution`
+    /// The uniform lattice of `crate::geometry::voxel::voxelize`: `resolution`
     /// voxels along the longest edge, centred on the bounding box.
     pub fn uniform(mesh: &TriMesh, resolution: usize) -> Result<LatticePlanes> {
-        let (lo, h, dims) = crate::context::volume::uniform_lattice(mesh, resolution)?;
+        let (lo, h, dims) = crate::geometry::voxel::uniform_lattice(mesh, resolution)?;
         let planes: [Vec<f64>; 3] = std::array::from_fn(|a| (0..=dims[a]).map(|i| lo[a] + i as f64 * h).collect());
         Ok(LatticePlanes { lo, planes, h, aligned: Default::default() })
     }
@@ -212,9 +212,9 @@ mod tests {
 
     #[test]
     fn the_uniform_planes_are_the_voxelisers() {
-        let b = crate::hex::surface::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
+        let b = crate::geometry::trimesh::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
         let l = LatticePlanes::uniform(&b, 10).unwrap();
-        let v = crate::context::volume::voxelize(&b, 10).unwrap();
+        let v = crate::geometry::voxel::voxelize(&b, 10).unwrap();
         assert_eq!(l.dims(), v.grid.dims);
         assert_eq!(l.lo, v.lo);
         assert_eq!(l.h, v.h);
@@ -226,7 +226,7 @@ mod tests {
     fn planes_land_on_the_large_faces_and_the_warp_inverts() {
         // a box of 1 x 1 x 0.55 at 10 voxels: uniform planes at -0.025 + 0.1 i in z
         // miss its top and bottom; aligned, z has 6 voxels of 0.55 / 6 from 0
-        let b = crate::hex::surface::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
+        let b = crate::geometry::trimesh::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
         let l = LatticePlanes::aligned(&b, 10, 0.05).unwrap();
         assert_eq!(l.aligned, [vec![0.0, 1.0], vec![0.0, 1.0], vec![0.0, 0.55]]);
         assert_eq!(l.dims(), [10, 10, 6]);
@@ -239,7 +239,7 @@ mod tests {
         assert!((s[2] - 0.55 / 6.0).abs() < 1e-12 && (s[0] - 0.1).abs() < 1e-12);
         // the warped surface fills the lattice's voxels exactly
         let w = l.warped(&b);
-        let g = crate::context::volume::voxelize_on(&w, l.lo, l.h, l.dims());
+        let g = crate::geometry::voxel::voxelize_on(&w, l.lo, l.h, l.dims());
         assert_eq!(g.count(), 600);
     }
 }

@@ -1161,7 +1161,7 @@ pub(crate) fn finish(
 mod tests {
     use super::*;
 
-    use crate::hex::surface::tests::box_mesh;
+    use crate::geometry::trimesh::tests::box_mesh;
 
     #[test]
     fn unit_box_maps_to_a_perfect_grid() {

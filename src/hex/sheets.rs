@@ -745,7 +745,7 @@ mod tests {
     /// A 6 x 4 x 3 box of unit voxels' faces, turned so that none of its edges
     /// runs along a lattice axis.
     fn turned_box() -> TriMesh {
-        let m = crate::mesh::tests::voxels([6, 4, 3], |_, _, _| true);
+        let m = crate::geometry::trimesh::tests::voxels([6, 4, 3], |_, _, _| true);
         let (a, b) = (25f64.to_radians(), 15f64.to_radians());
         let v = m
             .vertices
@@ -835,7 +835,7 @@ mod tests {
         let corners = [[0.0, 0.0, 0.0], [6.0, 0.0, 0.0], [0.0, 4.0, 0.0], [6.0, 4.0, 3.0]];
         let turned = turned_box();
         for c in corners {
-            let k = crate::mesh::tests::voxels([6, 4, 3], |_, _, _| true).vertices.iter().position(|p| *p == c).unwrap();
+            let k = crate::geometry::trimesh::tests::voxels([6, 4, 3], |_, _, _| true).vertices.iter().position(|p| *p == c).unwrap();
             let x = turned.vertices[k];
             let near = r.mesh.nodes.iter().map(|p| norm(sub(*p, x))).fold(f64::INFINITY, f64::min);
             assert!(near < 1e-9, "corner {c:?}: nearest node {near}");

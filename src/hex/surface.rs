@@ -336,20 +336,7 @@ impl Surface {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-
-    pub(crate) fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
-        let v: Vec<[f64; 3]> = (0..8)
-            .map(|i| [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }])
-            .collect();
-        // faces (outward, counter-clockwise): quads split into triangles
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let mut t = Vec::new();
-        for q in quads {
-            t.push([q[0], q[1], q[2]]);
-            t.push([q[0], q[2], q[3]]);
-        }
-        TriMesh { vertices: v, triangles: t }
-    }
+    use crate::geometry::trimesh::tests::box_mesh;
 
     #[test]
     fn box_features() {

@@ -8,7 +8,7 @@
 //! has the input's topology (one component, no cavity, the input's genus; a solid
 //! in one piece with extra tunnels, where a wall thinner than a voxel passes
 //! between the voxel centres, first gets the voxels that are mostly or partly
-//! inside, [`crate::context::volume::solid_fractions`]). The
+//! inside, [`crate::geometry::voxel::solid_fractions`]). The
 //! voxels become the hex elements; their boundary nodes are pulled onto the input
 //! surface in validity-preserving steps (as the polycube map's nodes are), and the
 //! usual quality steps follow: pillowing (which gives every boundary element one
@@ -28,11 +28,11 @@ use super::pipeline::{finish, relax_and_refit, working_frames, HexOptions, HexRe
 use super::topology;
 use super::{Affine, HexMesh};
 use super::lattice::LatticePlanes;
-use crate::context::volume::betti;
 use crate::error::{check_progress, Error, Progress, Result, SubProgress};
 use crate::geometry::vec3::{add, norm, scale, sub};
+use crate::geometry::voxel::betti;
+use crate::geometry::VoxelGrid;
 use crate::mesh::TriMesh;
-use crate::polycube::VoxelGrid;
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -421,7 +421,7 @@ fn next_resolution(last: LastLattice, best_res: usize, goal: f64) -> usize {
 struct Lattice {
     /// The voxels on the uniform lattice `vol.lo + i * vol.h` of the warped surface
     /// (the surface itself when `planes` is uniform).
-    vol: crate::context::volume::VoxelVolume,
+    vol: crate::geometry::voxel::VoxelVolume,
     planes: LatticePlanes,
     filled: usize,
     thin_wall: Option<(usize, f32)>,
@@ -438,7 +438,7 @@ fn topology_lattice(mesh: &TriMesh, res: usize, planes: Option<LatticePlanes>, g
     };
     let lm = planes.warped(mesh);
     let label = if planes.is_uniform() { res.to_string() } else { format!("{res} (planes on faces)") };
-    let mut vol = crate::context::volume::VoxelVolume { lo: planes.lo, h: planes.h, grid: crate::context::volume::voxelize_on(&lm, planes.lo, planes.h, planes.dims()) };
+    let mut vol = crate::geometry::voxel::VoxelVolume { lo: planes.lo, h: planes.h, grid: crate::geometry::voxel::voxelize_on(&lm, planes.lo, planes.h, planes.dims()) };
     let centre_occ = vol.grid.occ.clone();
     let filled = make_well_composed(&mut vol.grid);
     let (b0, b2, b1) = betti(&vol.grid);
@@ -457,7 +457,7 @@ fn topology_lattice(mesh: &TriMesh, res: usize, planes: Option<LatticePlanes>, g
         // surface) until the topology is the input's. A solid in pieces
         // (trimesh_round's tube wall below 188 voxels) is too coarse as a whole:
         // filling would make a wall of squeezed one-voxel elements; it is refined.
-        let frac = crate::context::volume::solid_fractions(&lm, &vol, 4);
+        let frac = crate::geometry::voxel::solid_fractions(&lm, &vol, 4);
         let centre_count = centre_occ.iter().filter(|&&o| o).count();
         for tau in [0.375f32, 0.25, 0.125] {
             let mut g = VoxelGrid { dims: vol.grid.dims, occ: centre_occ.iter().zip(&frac).map(|(&o, &f)| o || f >= tau).collect() };
@@ -528,7 +528,7 @@ struct Carved {
 /// round of local refinement).
 fn fine_voxels(mesh: &TriMesh, lattice: &Lattice) -> VoxelGrid {
     let vol = &lattice.vol;
-    crate::context::volume::voxelize_on(&lattice.planes.warped(mesh), vol.lo, vol.h / 3.0, vol.grid.dims.map(|d| 3 * d))
+    crate::geometry::voxel::voxelize_on(&lattice.planes.warped(mesh), vol.lo, vol.h / 3.0, vol.grid.dims.map(|d| 3 * d))
 }
 
 /// Local refinement with re-voxelisation: the lattice's voxels in `boxes` (boxes of
@@ -539,7 +539,7 @@ fn fine_voxels(mesh: &TriMesh, lattice: &Lattice) -> VoxelGrid {
 /// the surface at the fine voxel size instead of keeping the coarse staircase. Err
 /// (why) when the fine solid cannot be made well-composed within the split voxels
 /// or does not have the input's topology (one component, no cavity, `genus`).
-fn carve_refined(vol: &crate::context::volume::VoxelVolume, boxes: &[([u32; 3], [u32; 3])], fine_in: &VoxelGrid, genus: i64) -> std::result::Result<Carved, String> {
+fn carve_refined(vol: &crate::geometry::voxel::VoxelVolume, boxes: &[([u32; 3], [u32; 3])], fine_in: &VoxelGrid, genus: i64) -> std::result::Result<Carved, String> {
     let dims = vol.grid.dims;
     let in_box = |p: [u32; 3]| super::refine::in_boxes(p, boxes);
     let mut all = vol.grid.clone();
@@ -1076,7 +1076,7 @@ mod tests {
         assert_eq!(betti(&vol.grid), (1, 0, 1), "{tried:?}");
         assert!(tried[0].ends_with("genus 2") && tried.iter().any(|t| t.contains("solid (+")), "{tried:?}");
         // every voxel whose centre is inside is kept
-        let centre = crate::context::volume::voxelize(&mesh, 24).unwrap();
+        let centre = crate::geometry::voxel::voxelize(&mesh, 24).unwrap();
         assert!(centre.grid.occ.iter().zip(&vol.grid.occ).all(|(&c, &o)| o || !c));
         let r = build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), 1, &opts, &mut crate::error::NoProgress).unwrap();
         assert_eq!(r.domain, "voxel 24");
@@ -1291,7 +1291,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/hexgen_rod.obj");
         let mesh = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
         let genus = mesh.validate().unwrap().genus.unwrap();
-        let mut vol = crate::context::volume::voxelize(&mesh, 24).unwrap();
+        let mut vol = crate::geometry::voxel::voxelize(&mesh, 24).unwrap();
         make_well_composed(&mut vol.grid);
         assert_eq!(betti(&vol.grid), (1, 0, genus));
         let cell = |p: [f64; 3]| -> [u32; 3] { std::array::from_fn(|a| ((p[a] - vol.lo[a]) / vol.h).floor() as u32) };

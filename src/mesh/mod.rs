@@ -1,4 +1,5 @@
 //! Triangle meshes: reading (OBJ, STL, OFF, arrays), welding, checks and measures.
+//! The [`TriMesh`] type itself lives in [`crate::geometry`] (re-exported here).
 //!
 //! Loading reads a triangle soup, refuses non-finite coordinates and empty
 //! meshes, welds coincident vertices within a tolerance relative to the
@@ -16,16 +17,10 @@ pub use check::{Issue, IssueKind, MeshReport, Severity};
 pub use intersect::self_intersections;
 pub use io::Format;
 
+pub use crate::geometry::TriMesh;
+
 use crate::error::{Error, Result};
 use std::path::Path;
-
-/// An indexed triangle mesh in f64. Triangles are counter-clockwise seen from outside
-/// once the mesh has passed the checks.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct TriMesh {
-    pub vertices: Vec<[f64; 3]>,
-    pub triangles: Vec<[u32; 3]>,
-}
 
 /// Default weld tolerance, relative to the bounding-box diagonal.
 pub const DEFAULT_WELD_TOLERANCE: f64 = 1e-9;
@@ -249,37 +244,6 @@ impl TriMesh {
             stats.triangles_flipped = self.repair_orientation();
         }
         Ok(self)
-    }
-
-    /// Drop vertices no triangle uses, keeping the order of the others. Returns how many went.
-    pub fn remove_unreferenced(&mut self) -> usize {
-        let mut used = vec![false; self.vertices.len()];
-        for t in &self.triangles {
-            for &v in t {
-                if let Some(u) = used.get_mut(v as usize) {
-                    *u = true;
-                }
-            }
-        }
-        let removed = used.iter().filter(|u| !**u).count();
-        if removed == 0 {
-            return 0;
-        }
-        let mut new_id = vec![u32::MAX; self.vertices.len()];
-        let mut kept = Vec::with_capacity(self.vertices.len() - removed);
-        for (i, p) in self.vertices.iter().enumerate() {
-            if used[i] {
-                new_id[i] = kept.len() as u32;
-                kept.push(*p);
-            }
-        }
-        self.vertices = kept;
-        for t in &mut self.triangles {
-            for v in t.iter_mut() {
-                *v = new_id[*v as usize];
-            }
-        }
-        removed
     }
 
     /// Explicit repair: make the orientation of a closed, edge-manifold surface

@@ -9,5 +9,5 @@ pub mod primitive;
 pub mod synthetic;
 pub mod tensor;
 
-pub use assembly::{assemble, boundary, check, QuadMesh, Validity, VoxelGrid};
+pub use assembly::{assemble, boundary, check, QuadMesh, Validity};
 pub use primitive::{cell_coords, cell_index, Family, Primitive, CONTEXT_DIM, GRID, LATTICE, NUM_CELLS, NUM_LABELS};

@@ -1,21 +1,58 @@
-//! The temporary volume of the automated mode: the aligned input filled on a regular
-//! voxel lattice (a voxel is inside when at least two of three axis-parallel rays
-//! through its centre cross the surface an odd number of times before reaching it,
-//! which tolerates the odd self-intersection or grazing hit), each inside voxel split
-//! into six Kuhn tetrahedra. Its volume is reported against the surface's own.
+//! Voxel sets and the voxeliser: a closed surface filled on a regular voxel lattice
+//! (a voxel is inside when at least two of three axis-parallel rays through its
+//! centre cross the surface an odd number of times before reaching it, which
+//! tolerates the odd self-intersection or grazing hit), each inside voxel split into
+//! six Kuhn tetrahedra, and the solid fraction of each voxel. The automated mode's
+//! temporary volume (`search::auto`) and the voxel hex mesher
+//! (`hex::voxel`) are built on it.
 //!
-//! Subregions: the aligned bounding box is split by the splitting ratios; each
-//! subregion's voxels give its solid, whose first Betti number b1 (the number of
+//! Topology of a voxel solid ([`betti`]): its first Betti number b1 (the number of
 //! independent tunnels: b1 = b0 + b2 - chi of the closed cubical complex, with
-//! 26-connected solid components b0 and 6-connected sealed cavities b2) is the
-//! subregion's genus.
+//! 26-connected solid components b0 and 6-connected sealed cavities b2) is its genus.
 
+use super::{Aabb, Bvh, TriMesh};
 use crate::error::{Error, Result};
-use crate::geometry::{Aabb, Bvh};
-use crate::mesh::TriMesh;
-use crate::polycube::VoxelGrid;
-use serde::Serialize;
 
+/// A box-shaped lattice of occupied / empty voxels; index x + nx (y + ny z).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct VoxelGrid {
+    pub dims: [usize; 3],
+    pub occ: Vec<bool>,
+}
+
+impl VoxelGrid {
+    pub fn empty(dims: [usize; 3]) -> Self {
+        VoxelGrid { dims, occ: vec![false; dims[0] * dims[1] * dims[2]] }
+    }
+
+    #[inline]
+    pub fn idx(&self, x: usize, y: usize, z: usize) -> usize {
+        x + self.dims[0] * (y + self.dims[1] * z)
+    }
+
+    /// Occupancy at signed coordinates; outside the lattice is empty.
+    #[inline]
+    pub fn at(&self, x: i64, y: i64, z: i64) -> bool {
+        if x < 0 || y < 0 || z < 0 {
+            return false;
+        }
+        let (x, y, z) = (x as usize, y as usize, z as usize);
+        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
+            return false;
+        }
+        self.occ[self.idx(x, y, z)]
+    }
+
+    pub fn count(&self) -> usize {
+        self.occ.iter().filter(|&&b| b).count()
+    }
+
+    /// Coordinates of voxel number `i`.
+    #[inline]
+    pub fn coords(&self, i: usize) -> [usize; 3] {
+        [i % self.dims[0], (i / self.dims[0]) % self.dims[1], i / (self.dims[0] * self.dims[1])]
+    }
+}
 /// A voxelised solid over an axis-aligned box.
 #[derive(Debug, Clone)]
 pub struct VoxelVolume {
@@ -308,89 +345,15 @@ pub fn betti(g: &VoxelGrid) -> (usize, usize, i64) {
     (b0, b2, b1)
 }
 
-/// What the automated mode measured for one subregion.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Subregion {
-    /// Cell index of the subregion in the grid.
-    pub cell: usize,
-    /// Box in the aligned frame.
-    pub lo: [f64; 3],
-    pub hi: [f64; 3],
-    /// Fraction of the subregion box that is solid.
-    pub fill: f64,
-    /// Solid components (26-connected), sealed cavities, tunnels (genus).
-    pub components: usize,
-    pub cavities: usize,
-    pub genus: i64,
-    /// The subregion is (almost) empty: label null.
-    pub empty: bool,
-}
-
-/// Split points of one axis from ratios (fractions summing to 1).
-pub fn split_points(lo: f64, hi: f64, ratios: &[f64]) -> Vec<f64> {
-    let total: f64 = ratios.iter().sum();
-    let mut v = vec![lo];
-    let mut acc = 0.0;
-    for r in ratios {
-        acc += r / total;
-        v.push(lo + acc * (hi - lo));
-    }
-    *v.last_mut().unwrap() = hi;
-    v
-}
-
-/// Analyse the subregions of a volume split at `xs`, `ys`, `zs` (split points along each axis).
-pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
-    let mut out = Vec::new();
-    let [nx, ny, nz] = vol.grid.dims;
-    for (k, zw) in zs.windows(2).enumerate() {
-        for (j, yw) in ys.windows(2).enumerate() {
-            for (i, xw) in xs.windows(2).enumerate() {
-                let lo = [xw[0], yw[0], zw[0]];
-                let hi = [xw[1], yw[1], zw[1]];
-                let r = |a: usize, v: f64, n: usize| (((v - vol.lo[a]) / vol.h).round().max(0.0) as usize).min(n);
-                let (x0, x1) = (r(0, lo[0], nx), r(0, hi[0], nx));
-                let (y0, y1) = (r(1, lo[1], ny), r(1, hi[1], ny));
-                let (z0, z1) = (r(2, lo[2], nz), r(2, hi[2], nz));
-                let dims = [x1.saturating_sub(x0).max(1), y1.saturating_sub(y0).max(1), z1.saturating_sub(z0).max(1)];
-                let mut g = VoxelGrid::empty(dims);
-                for z in z0..z1 {
-                    for y in y0..y1 {
-                        for x in x0..x1 {
-                            let v = vol.grid.occ[vol.grid.idx(x, y, z)];
-                            let ix = g.idx(x - x0, y - y0, z - z0);
-                            g.occ[ix] = v;
-                        }
-                    }
-                }
-                let fill = g.count() as f64 / g.occ.len() as f64;
-                let (b0, b2, b1) = betti(&g);
-                out.push(Subregion {
-                    cell: crate::polycube::cell_index(i, j, k),
-                    lo,
-                    hi,
-                    fill,
-                    components: b0,
-                    cavities: b2,
-                    genus: b1,
-                    empty: fill < min_fill,
-                });
-            }
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::context::Context;
-    use crate::polycube::{assemble, boundary};
+    use crate::geometry::trimesh::tests::box_mesh;
 
     #[test]
-    fn solid_fractions_of_a_box_and_of_a_curved_part() {
+    fn solid_fractions_of_a_box() {
         // a box whose top lies at three quarters of a voxel: those voxels are 3/4 full
-        let b = crate::hex::surface::tests::box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
+        let b = box_mesh([0.0, 0.0, 0.0], [1.0, 1.0, 0.55]);
         let vol = voxelize(&b, 10).unwrap();
         assert_eq!(vol.grid.dims, [10, 10, 6]);
         let f = solid_fractions(&b, &vol, 4);
@@ -400,38 +363,15 @@ mod tests {
                 assert!((f[i + 100 * z] as f64 - want).abs() < 1e-6, "z {z}: {} vs {want}", f[i + 100 * z]);
             }
         }
-        // any closed part: the fractions add up to its volume (cgal_spool, whose lip
-        // and recess cut voxels at every angle; 4 x 4 rays a column sample it to 0.5 %)
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/cgal_spool.off");
-        let spool = TriMesh::load(&path, &crate::mesh::LoadOptions::default()).unwrap();
-        let vol = voxelize(&spool, 24).unwrap();
-        let f = solid_fractions(&spool, &vol, 4);
-        let sum: f64 = f.iter().map(|&x| x as f64).sum::<f64>() * vol.h.powi(3);
-        let v = spool.signed_volume();
-        assert!((sum - v).abs() < 0.005 * v, "{sum} vs {v}");
-        assert!(f.iter().all(|&x| (0.0..=1.0 + 1e-6).contains(&x)));
     }
 
     #[test]
-    fn betti_of_primitives_and_volumes() {
-        for p in crate::polycube::Primitive::solids() {
-            let (b0, b2, b1) = betti(&crate::polycube::assembly::single(p));
-            assert_eq!((b0, b2, b1), (1, 0, p.standalone_genus()), "{p}");
-        }
+    fn betti_of_a_sealed_cavity() {
         // A sealed cavity: b2 = 1, b1 = 0.
-        let ctx = Context::parse("THC+X,cube,0,0,0,0,0,0,0,0,0,0").unwrap();
-        let _ = ctx;
         let mut g = VoxelGrid::empty([3, 3, 3]);
         g.occ.iter_mut().for_each(|v| *v = true);
         let c = g.idx(1, 1, 1);
         g.occ[c] = false;
         assert_eq!(betti(&g), (1, 1, 0));
-        // The voxelised picture-frame torus: genus 1, volume close to the surface's.
-        let ctx = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
-        let m = boundary(&assemble(&ctx.labels)).to_trimesh();
-        let vol = voxelize(&m, 30).unwrap();
-        assert!((vol.volume() - 24.0 / 27.0).abs() < 1e-9, "{}", vol.volume());
-        let (b0, b2, b1) = betti(&vol.grid);
-        assert_eq!((b0, b2, b1), (1, 0, 1));
     }
 }
