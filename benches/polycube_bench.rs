@@ -3,7 +3,7 @@
 //! generation. Run: `cargo bench --bench polycube_bench` (prints a Markdown table).
 
 use sddpm::context::{Constraints, Context};
-use sddpm::polycube::dataset::{generate, DatasetConfig};
+use sddpm::diffusion::dataset::{generate, DatasetConfig};
 use sddpm::polycube::{assemble, check, Primitive};
 use std::time::Instant;
 

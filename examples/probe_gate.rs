@@ -7,7 +7,7 @@ use rand_distr::{Distribution, StandardNormal};
 use sddpm::diffusion::model::prior_image;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::{generate, DatasetConfig};
+use sddpm::diffusion::dataset::{generate, DatasetConfig};
 use sddpm::polycube::tensor::{flat, slot, POINTS_PER_CELL, TENSOR_H, TENSOR_LEN, TENSOR_W};
 use sddpm::polycube::{Primitive, NUM_CELLS};
 

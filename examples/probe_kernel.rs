@@ -10,7 +10,8 @@ use sddpm::context::Context;
 use sddpm::diffusion::model::prior_image;
 use sddpm::diffusion::schedule::{Schedule, ScheduleConfig};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::{context_frame, sample_cells};
+use sddpm::context::context_frame;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{flat, layout, slot, TENSOR_LEN};
 use sddpm::verify::{active_points, cached_templates, local_points, pcd, pcd_labels};
 

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, StandardNormal};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::sample_cells;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{flat, layout, slot, TENSOR_H, TENSOR_LEN, TENSOR_W};
 
 fn bayes(kdraws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: &dyn Fn(usize) -> f64) -> Vec<f64> {

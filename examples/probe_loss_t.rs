@@ -4,7 +4,7 @@ use burn::tensor::{Tensor, TensorData};
 use rand_distr::{Distribution, StandardNormal};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::{generate, DatasetConfig};
+use sddpm::diffusion::dataset::{generate, DatasetConfig};
 use sddpm::polycube::tensor::{slot, flat, TENSOR_H, TENSOR_LEN, TENSOR_W, POINTS_PER_CELL};
 use sddpm::polycube::{Primitive, NUM_CELLS};
 fn main() {

@@ -5,7 +5,8 @@ use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::{context_frame, sample_cells};
+use sddpm::context::context_frame;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_W};
 use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
 fn main() {

@@ -5,7 +5,8 @@ use rand_distr::{Distribution, StandardNormal};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::{context_frame, sample_cells};
+use sddpm::context::context_frame;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_LEN, TENSOR_W};
 use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
 fn main() {

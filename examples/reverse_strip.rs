@@ -9,7 +9,7 @@ use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
 use sddpm::export::render::{render, Camera, Canvas, Layer};
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::sample_cells;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use sddpm::polycube::NUM_CELLS;
 use sddpm::verify::active_points;

@@ -7,7 +7,7 @@ use sddpm::diffusion::sample::{reverse_diffusion, SamplerOptions};
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::sample_cells;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use std::time::Instant;
 

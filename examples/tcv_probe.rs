@@ -13,7 +13,8 @@ use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
 use sddpm::polycube::synthetic::{cases, SyntheticOptions};
 use sddpm::polycube::Primitive;
-use sddpm::verify::{active_points, cached_templates, local_points, shared_faces, visible_part};
+use sddpm::polycube::assembly::shared_faces;
+use sddpm::verify::{active_points, cached_templates, local_points, visible_part};
 
 fn half(from: &[[f64; 3]], to: &[[f64; 3]], tau: f64) -> f64 {
     let t = ImmutableKdTree::new_from_slice(to).unwrap();

@@ -20,7 +20,8 @@
 
 use crate::context::Context;
 use crate::geometry::rng::seeded_rng;
-use crate::polycube::dataset::sample_primitive;
+use crate::diffusion::dataset::sample_primitive;
+use crate::polycube::assembly::shared_faces;
 use crate::polycube::tensor::{unlayout, BoxFrame, TENSOR_LEN};
 use crate::polycube::{cell_coords, Primitive, NUM_CELLS, NUM_LABELS};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -195,27 +196,6 @@ pub fn pcd(x: &[[f64; 3]], y: &[[f64; 3]], tau: f64, p: f64) -> f64 {
     let tx = ImmutableKdTree::new_from_slice(x).expect("non-empty");
     let ty = ImmutableKdTree::new_from_slice(y).expect("non-empty");
     0.5 * (one_sided(x, &ty, tau, p) + one_sided(y, &tx, tau, p))
-}
-
-/// The faces of cell `n` that touch an occupied neighbour in `labels`: bit 2a is the
-/// face at the low end of axis a, bit 2a + 1 the face at its high end.
-pub fn shared_faces(labels: &[Primitive; NUM_CELLS], n: usize) -> u8 {
-    let c = cell_coords(n);
-    let mut bits = 0u8;
-    for a in 0..3 {
-        for (side, step) in [(0u8, -1i64), (1, 1)] {
-            let mut d = c.map(|v| v as i64);
-            d[a] += step;
-            let limit = crate::polycube::GRID[a] as i64;
-            if d[a] >= 0 && d[a] < limit {
-                let m = crate::polycube::cell_index(d[0] as usize, d[1] as usize, d[2] as usize);
-                if labels[m] != Primitive::Null {
-                    bits |= 1 << (2 * a as u8 + side);
-                }
-            }
-        }
-    }
-    bits
 }
 
 /// A centred template (cell units, faces at +-0.5) without its points on the faces
@@ -406,7 +386,8 @@ pub fn pcd_labels() -> [&'static str; NUM_LABELS - 1] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::polycube::dataset::{context_frame, sample_cells};
+    use crate::context::context_frame;
+    use crate::diffusion::dataset::sample_cells;
     use crate::polycube::tensor::layout;
 
     #[test]

@@ -8,7 +8,7 @@ use sddpm::diffusion::train::{read_loss_csv, train, TrainConfig};
 use sddpm::diffusion::{Backend, Model, DEFAULT_WEIGHTS};
 use sddpm::error::NoProgress;
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::dataset::sample_cells;
+use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 
 fn tiny_config() -> TrainConfig {
@@ -306,7 +306,7 @@ fn template_attention_is_the_bayes_estimate_and_its_warm_start_changes_nothing()
     // the visible prior holds no point on a shared face: cell 1 (1, 0, 0) shares x = 1
     // and x = 2 (grid units) with cells 0 and 2
     let vis = sddpm::diffusion::model::prior_image_visible(&ctx.one_hot());
-    let frame = sddpm::polycube::dataset::context_frame(&ctx).unwrap();
+    let frame = sddpm::context::context_frame(&ctx).unwrap();
     for p in 0..512 {
         let (r, c) = slot(1, p);
         let g = frame.to_grid([0, 1, 2].map(|ch| vis[flat(ch, r, c)] as f64));

@@ -8,7 +8,7 @@ use sddpm::hex::quality::{element_qualities, summarize};
 use sddpm::hex::topology::{hex_volume, mesh_volume};
 use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
 use sddpm::mesh::{LoadOptions, TriMesh};
-use sddpm::polycube::dataset::context_frame;
+use sddpm::context::context_frame;
 
 
 /// The polycube's own boundary in the normalised frame, every quad split k x k, then

@@ -1,7 +1,7 @@
 //! `sddpm dataset -o DIR [--seed 42]`: write the training set for inspection.
 
 use sddpm::error::Error;
-use sddpm::polycube::dataset::{generate, DatasetConfig};
+use sddpm::diffusion::dataset::{generate, DatasetConfig};
 use sddpm::polycube::tensor::TENSOR_LEN;
 use sddpm::Result;
 use std::io::Write;

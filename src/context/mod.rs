@@ -7,8 +7,9 @@ pub mod generate;
 
 use crate::error::{Error, Result};
 use crate::geometry::VoxelGrid;
-use crate::polycube::assembly::{assemble, check, Validity};
+use crate::polycube::assembly::{assemble, check, occupied_cell_box, Validity};
 use crate::polycube::primitive::{cell_coords, Family, Primitive, CONTEXT_DIM, NUM_CELLS, NUM_LABELS};
+use crate::polycube::tensor::BoxFrame;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use serde::{Deserialize, Serialize};
@@ -470,6 +471,11 @@ pub fn valid_cube_occupancies() -> &'static [bool; 4096] {
         }
         t
     })
+}
+
+/// The normalised frame of a context: its occupied cells' box, longest edge 2, centred.
+pub fn context_frame(ctx: &Context) -> Option<BoxFrame> {
+    occupied_cell_box(&ctx.labels).map(|(lo, hi)| BoxFrame::for_box(lo.map(|v| v as f64), hi.map(|v| v as f64)))
 }
 
 #[cfg(test)]

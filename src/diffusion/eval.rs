@@ -8,7 +8,7 @@ use crate::context::generate::{generate_from_contexts, Candidate, PolycubeOption
 use crate::context::Context;
 use crate::error::{NoProgress, Result};
 use crate::geometry::rng::seeded_rng;
-use crate::polycube::dataset::sample_cells;
+use crate::diffusion::dataset::sample_cells;
 use crate::polycube::synthetic::{cases, SyntheticOptions};
 use crate::polycube::tensor::unlayout;
 use crate::polycube::{Primitive, NUM_CELLS};
@@ -123,7 +123,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
             // or the retry's) the output carries no shared faces, and neither does the
             // assembled surface
             let exact = if opts.sampler.visible_prior || c.visible_retry {
-                crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
+                crate::diffusion::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
             } else {
                 sample_cells(&ctx, 1.0, &mut rng)
             };
@@ -244,7 +244,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 .map(|k| SweepCell {
                     local: crate::verify::local_points(&crate::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale),
                     target: c.context.labels[k],
-                    shared: if opts.verify.visible_coverage { crate::verify::shared_faces(&c.context.labels, k) } else { 0 },
+                    shared: if opts.verify.visible_coverage { crate::polycube::assembly::shared_faces(&c.context.labels, k) } else { 0 },
                 })
                 .collect(),
         )
@@ -478,7 +478,7 @@ pub fn generator_eval(model: &Model, seed: u64, n: usize, min: usize, max: usize
         if let (Some(out), Some(inp)) = (&c.output, &c.input) {
             let (o, x) = (unlayout(out), unlayout(&inp.tensor));
             let mut rng = seeded_rng(seed ^ EXACT_SAMPLES_STREAM, i as u64);
-            let exact = if opts.verify.visible_coverage { crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng) } else { sample_cells(&ctx, 1.0, &mut rng) };
+            let exact = if opts.verify.visible_coverage { crate::diffusion::dataset::sample_cells_visible(&ctx, 1.0, &mut rng) } else { sample_cells(&ctx, 1.0, &mut rng) };
             let s = 1.0 / inp.frame.scale;
             for k in ctx.occupied() {
                 for (a, b) in o[k].iter().zip(&x[k]) {

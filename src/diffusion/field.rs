@@ -219,7 +219,7 @@ pub fn cell_frames(one_hot: &[f32]) -> Option<[Option<CellFrame>; NUM_CELLS]> {
 
 /// The frames of a context's occupied cells.
 pub fn frames_of(ctx: &Context) -> Option<[Option<CellFrame>; NUM_CELLS]> {
-    let frame = crate::polycube::dataset::context_frame(ctx)?;
+    let frame = crate::context::context_frame(ctx)?;
     Some(std::array::from_fn(|n| {
         (ctx.labels[n] != Primitive::Null).then(|| {
             let [i, j, k] = cell_coords(n);

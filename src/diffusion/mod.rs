@@ -5,6 +5,7 @@
 //! pure-Rust `flex` CPU backend by default, burn-ndarray behind the `ndarray` cargo
 //! feature, and GPU backends behind `wgpu` / `cuda`.
 
+pub mod dataset;
 pub mod eval;
 pub mod field;
 pub mod model;

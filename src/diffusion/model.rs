@@ -665,9 +665,9 @@ fn prior_image_of(one_hot: &[f32], visible: bool) -> Vec<f32> {
     let ctx = crate::context::Context { labels };
     let mut rng = crate::geometry::rng::seeded_rng(PRIOR_SEED, 0);
     let mut cells = if visible {
-        crate::polycube::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
+        crate::diffusion::dataset::sample_cells_visible(&ctx, 1.0, &mut rng)
     } else {
-        crate::polycube::dataset::sample_cells(&ctx, 1.0, &mut rng)
+        crate::diffusion::dataset::sample_cells(&ctx, 1.0, &mut rng)
     };
     for n in 0..NUM_CELLS {
         if withheld[n] {

@@ -136,7 +136,7 @@ pub const DEFAULT_CLIP_MARGIN: f64 = -1.0;
 /// [`SamplerOptions::start_noise`]).
 pub fn start_step_for(sched: &super::schedule::Schedule, opts: &SamplerOptions, ctx: &Context) -> usize {
     let t_max = sched.steps();
-    if let (Some(sigma), Some(frame)) = (opts.start_noise, crate::polycube::dataset::context_frame(ctx)) {
+    if let (Some(sigma), Some(frame)) = (opts.start_noise, crate::context::context_frame(ctx)) {
         return (1..=t_max).find(|&t| ((1.0 - sched.alpha_bar[t]) / sched.alpha_bar[t]).sqrt() / frame.scale >= sigma).unwrap_or(t_max);
     }
     if opts.start_step == 0 {
@@ -149,7 +149,7 @@ pub fn start_step_for(sched: &super::schedule::Schedule, opts: &SamplerOptions, 
 /// Per-slot clipping boxes [lo, hi] (model frame) of one context: each occupied
 /// cell's box grown by `margin` cell units; None for null cells.
 fn clip_boxes(ctx: &Context, margin: f64) -> Vec<Option<([f64; 3], [f64; 3])>> {
-    let Some(frame) = crate::polycube::dataset::context_frame(ctx) else { return vec![None; NUM_CELLS] };
+    let Some(frame) = crate::context::context_frame(ctx) else { return vec![None; NUM_CELLS] };
     (0..NUM_CELLS)
         .map(|n| {
             if ctx.labels[n] == Primitive::Null {

@@ -12,7 +12,7 @@ use super::weights::{self, TrainingInfo, WeightsMeta};
 use super::{device, load_net, net_bytes, Backend};
 use crate::error::{Error, Result};
 use crate::geometry::rng::seeded_rng;
-use crate::polycube::dataset::{generate, DatasetConfig, Sample};
+use crate::diffusion::dataset::{generate, DatasetConfig, Sample};
 use crate::polycube::tensor::{TENSOR_H, TENSOR_LEN, TENSOR_W};
 use crate::polycube::CONTEXT_DIM;
 use burn::optim::grad_clipping::GradientClippingConfig;

@@ -25,7 +25,7 @@ use super::weights::{self, WeightsMeta};
 use super::{device, fresh_field, load_module, module_bytes, Backend};
 use crate::error::{Error, Result};
 use crate::geometry::rng::seeded_rng;
-use crate::polycube::dataset::generate;
+use crate::diffusion::dataset::generate;
 use crate::polycube::tensor::{unlayout, POINTS_PER_CELL};
 use crate::polycube::Primitive;
 use burn::optim::GradientsParams;

@@ -13,7 +13,7 @@
 use super::model::ModelConfig;
 use super::schedule::ScheduleConfig;
 use crate::error::{Error, Result};
-use crate::polycube::dataset::DatasetConfig;
+use crate::diffusion::dataset::DatasetConfig;
 use serde::{Deserialize, Serialize};
 
 pub const MAGIC: &[u8; 8] = b"SDDPMW\0\x01";

@@ -18,7 +18,7 @@ use crate::geometry::vec3::*;
 use crate::geometry::{Aabb, Alignment};
 use crate::mesh::TriMesh;
 use crate::polycube::assembly::occupied_cell_box;
-use crate::polycube::dataset::context_frame;
+use crate::context::context_frame;
 use crate::polycube::tensor::BoxFrame;
 use rayon::prelude::*;
 use serde::Serialize;

@@ -581,6 +581,27 @@ pub fn boundary(g: &VoxelGrid) -> QuadMesh {
     m
 }
 
+/// The faces of cell `n` that touch an occupied neighbour in `labels`: bit 2a is the
+/// face at the low end of axis a, bit 2a + 1 the face at its high end.
+pub fn shared_faces(labels: &[Primitive; NUM_CELLS], n: usize) -> u8 {
+    let c = cell_coords(n);
+    let mut bits = 0u8;
+    for a in 0..3 {
+        for (side, step) in [(0u8, -1i64), (1, 1)] {
+            let mut d = c.map(|v| v as i64);
+            d[a] += step;
+            let limit = GRID[a] as i64;
+            if d[a] >= 0 && d[a] < limit {
+                let m = cell_index(d[0] as usize, d[1] as usize, d[2] as usize);
+                if labels[m] != Primitive::Null {
+                    bits |= 1 << (2 * a as u8 + side);
+                }
+            }
+        }
+    }
+    bits
+}
+
 /// Bounding box of the occupied cells of a labelling, in grid units: (min, max) corners.
 pub fn occupied_cell_box(labels: &[Primitive; NUM_CELLS]) -> Option<([usize; 3], [usize; 3])> {
     let mut lo = [usize::MAX; 3];

@@ -3,11 +3,10 @@
 //! with the correspondence (tensor slot -> point on the input surface) and the cheap
 //! occupancy pre-check that rejects a context before any diffusion.
 
-use super::dataset::context_frame;
 use super::orientation::AxisRotation;
 use super::primitive::{cell_coords, cell_index, Primitive, NUM_CELLS};
 use super::tensor::{layout, sort_order, BoxFrame, POINTS_PER_CELL};
-use crate::context::Context;
+use crate::context::{context_frame, Context};
 use crate::error::{Error, Result};
 use crate::geometry::SurfaceSample;
 use rand::RngExt;

@@ -2,7 +2,6 @@
 //! assembly on the 9x6x6 sub-voxel lattice, and the point tensors of the model.
 
 pub mod assembly;
-pub mod dataset;
 pub mod inference;
 pub mod orientation;
 pub mod primitive;

@@ -9,11 +9,11 @@
 //! - every sample has its own generator, seeded from (seed, sample index), so the set
 //!   is the same whatever the number of threads.
 
-use super::assembly::{boundary, occupied_cell_box, single};
-use super::primitive::{cell_coords, Primitive, NUM_CELLS};
-use super::tensor::{layout, sort_order, BoxFrame, POINTS_PER_CELL};
-use crate::context::{valid_cube_occupancies, Context};
+use crate::context::{context_frame, valid_cube_occupancies, Context};
 use crate::geometry::rng::seeded_rng;
+use crate::polycube::assembly::{boundary, shared_faces, single};
+use crate::polycube::primitive::{cell_coords, Primitive, NUM_CELLS};
+use crate::polycube::tensor::{layout, sort_order, POINTS_PER_CELL};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -69,7 +69,7 @@ pub fn sample_primitive(p: Primitive, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f6
 
 /// `n` points uniform by area on the part of primitive `p`'s surface off the cell
 /// faces `shared` names (bit 2a: the face at the low end of axis a, bit 2a + 1: the
-/// high end; see `verify::shared_faces`), in cell-local coordinates. A primitive with
+/// high end; see [`shared_faces`]), in cell-local coordinates. A primitive with
 /// nothing left (impossible for the ten solids: a cell has at most six shared faces,
 /// and its hole walls are never on a face) gives no points.
 pub fn sample_primitive_visible(p: Primitive, shared: u8, n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; 3]> {
@@ -98,11 +98,6 @@ pub fn sample_primitive_visible(p: Primitive, shared: u8, n: usize, rng: &mut Ch
         .collect()
 }
 
-/// The normalised frame of a context: its occupied cells' box, longest edge 2, centred.
-pub fn context_frame(ctx: &Context) -> Option<BoxFrame> {
-    occupied_cell_box(&ctx.labels).map(|(lo, hi)| BoxFrame::for_box(lo.map(|v| v as f64), hi.map(|v| v as f64)))
-}
-
 /// [`sample_cells`] with each cell's primitive sampled off the faces it shares with
 /// occupied neighbours ([`sample_primitive_visible`]): the part of the assembled
 /// surface a cell can carry.
@@ -129,7 +124,7 @@ fn sample_cells_of(ctx: &Context, scale: f64, rng: &mut ChaCha8Rng, visible: boo
                 return Vec::new();
             }
             let [i, j, k] = cell_coords(n);
-            let shared = if visible { crate::verify::shared_faces(&ctx.labels, n) } else { 0 };
+            let shared = if visible { shared_faces(&ctx.labels, n) } else { 0 };
             let pts: Vec<[f32; 3]> = sample_primitive_visible(p, shared, POINTS_PER_CELL, rng)
                 .into_iter()
                 .map(|x| {
