@@ -12,8 +12,8 @@
 //! cell, seen from above the grid's Z axis), and prints one markdown row per subregion: cell, fill, genus, the
 //! feasible labels with their in-context fits, the labels kept and the labels
 //! that passed local verification.
-use sddpm::context::auto::AutoOptions;
-use sddpm::context::generate::PolycubeOptions;
+use sddpm::search::auto::AutoOptions;
+use sddpm::search::generate::PolycubeOptions;
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
 use sddpm::export::render::{render_png, Camera, Layer};
@@ -129,7 +129,7 @@ fn main() -> sddpm::Result<()> {
         if c.context.labels[n] == Primitive::Null {
             continue;
         }
-        let p = sddpm::verify::active_points(out, n, 1e-4);
+        let p = sddpm::search::verify::active_points(out, n, 1e-4);
         cols.extend(std::iter::repeat(PALETTE[n]).take(p.len()));
         pts.extend(p);
     }

@@ -4,13 +4,13 @@
 //! (mean squared, cell units) and the maximum deviation (largest distance from an
 //! output point to the input's samples, cell units) between the decoded cell and the
 //! input surface it came from. Args: [cases] [weights]
-use sddpm::context::generate::{generate_from_contexts, PolycubeOptions};
+use sddpm::search::generate::{generate_from_contexts, PolycubeOptions};
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::NoProgress;
 use sddpm::geometry::rng::seeded_rng;
-use sddpm::polycube::synthetic::{synthetic_mesh, SyntheticOptions};
-use sddpm::verify::{active_points, chamfer};
+use sddpm::search::synthetic::{synthetic_mesh, SyntheticOptions};
+use sddpm::search::verify::{active_points, chamfer};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

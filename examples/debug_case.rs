@@ -1,6 +1,6 @@
-use sddpm::context::generate::{prepare_input, PolycubeOptions};
-use sddpm::polycube::synthetic::{cases, SyntheticOptions};
-use sddpm::polycube::inference::occupancy_only;
+use sddpm::search::generate::{prepare_input, PolycubeOptions};
+use sddpm::search::synthetic::{cases, SyntheticOptions};
+use sddpm::search::inference::occupancy_only;
 use sddpm::polycube::orientation::rotations;
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -6,7 +6,7 @@ use sddpm::geometry::rng::seeded_rng;
 use sddpm::context::context_frame;
 use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{layout, unlayout, TENSOR_LEN};
-use sddpm::verify::{chamfer, verify, VerifyOptions};
+use sddpm::search::verify::{chamfer, verify, VerifyOptions};
 use rand_distr::{Distribution, StandardNormal};
 fn main() {
     let args: Vec<String> = std::env::args().collect();

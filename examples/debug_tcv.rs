@@ -9,7 +9,7 @@ use sddpm::context::context_frame;
 use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use sddpm::polycube::Primitive;
-use sddpm::verify::{active_points, cached_templates, chamfer, local_points, pcd};
+use sddpm::search::verify::{active_points, cached_templates, chamfer, local_points, pcd};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();

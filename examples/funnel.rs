@@ -5,8 +5,8 @@
 //! local verification, pre-check, global GOCC, global TCV).
 //!
 //! `cargo run --release --example funnel -- [CONTEXT] [RATIOS] [WARP]`
-use sddpm::context::auto::{AutoOptions, SplitRatios};
-use sddpm::context::generate::{PolycubeOptions, Stage};
+use sddpm::search::auto::{AutoOptions, SplitRatios};
+use sddpm::search::generate::{PolycubeOptions, Stage};
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;

@@ -7,10 +7,10 @@
 //! prints one line per context: kind, fit, best alternative's fit, their ratio.
 //! `cargo run --release --example neighbour_fit -- mesh PATH CONTEXT` does the same
 //! for one real mesh and the context the automated mode chose for it.
-use sddpm::context::generate::{best_neighbour, limit_fit, precheck, prepare_input, without_fit_limit, PolycubeOptions, PreparedInput, Stage};
+use sddpm::search::generate::{best_neighbour, limit_fit, precheck, prepare_input, without_fit_limit, PolycubeOptions, PreparedInput, Stage};
 use sddpm::context::Context;
-use sddpm::diffusion::eval::wrong_context;
-use sddpm::polycube::synthetic::{cases, SyntheticOptions};
+use sddpm::search::eval::wrong_context;
+use sddpm::search::synthetic::{cases, SyntheticOptions};
 
 fn main() -> sddpm::Result<()> {
     let a: Vec<String> = std::env::args().collect();

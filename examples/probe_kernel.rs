@@ -13,7 +13,7 @@ use sddpm::geometry::rng::seeded_rng;
 use sddpm::context::context_frame;
 use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{flat, layout, slot, TENSOR_LEN};
-use sddpm::verify::{active_points, cached_templates, local_points, pcd, pcd_labels};
+use sddpm::search::verify::{active_points, cached_templates, local_points, pcd, pcd_labels};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -8,7 +8,7 @@ use sddpm::geometry::rng::seeded_rng;
 use sddpm::context::context_frame;
 use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::{layout, TENSOR_H, TENSOR_LEN, TENSOR_W};
-use sddpm::verify::{active_points, cached_templates, chamfer, local_points};
+use sddpm::search::verify::{active_points, cached_templates, chamfer, local_points};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let model = Model::from_file(std::path::Path::new(&args[1]), Backend::Flex).unwrap();

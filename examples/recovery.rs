@@ -27,13 +27,13 @@
 //! per-cell fits and PCDs as JSON lines, RECOVERY_VERBOSE=1 prints boxes, candidates and the
 //! user-guided verification per cell)
 //! (defaults 8, 5000, build/recovery.csv, simple,medium,complex)
-use sddpm::context::auto::AutoOptions;
-use sddpm::context::generate::{PolycubeOptions, Stage};
+use sddpm::search::auto::AutoOptions;
+use sddpm::search::generate::{PolycubeOptions, Stage};
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
 use sddpm::pipeline::{generate_polycube, ContextRequest};
 use sddpm::polycube::assembly::congruent;
-use sddpm::polycube::synthetic::{cases, SyntheticOptions, GROUPS};
+use sddpm::search::synthetic::{cases, SyntheticOptions, GROUPS};
 use sddpm::geometry::bvh::SurfaceLocator;
 use sddpm::mesh::TriMesh;
 use sddpm::pipeline::polycube_user_mesh;
@@ -92,8 +92,8 @@ fn cell_width(truth: &sddpm::context::Context, mesh: &TriMesh) -> f64 {
 /// in the automated mode's working frame (the 24 rotations that fit the grid): its
 /// fit against the best candidate's, its validity, the local rank of each true
 /// label in the box of its dimensions, and whether the pre-check passes it.
-fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, auto: Option<&sddpm::context::auto::AutoReport>) -> sddpm::Result<()> {
-    use sddpm::context::generate::{fit_score, fit_score_cells, polycube_samples, precheck, prepare_input, without_fit_limit, OrientationSearch, FIT_SAMPLES};
+fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::search::generate::PolycubeResult, auto: Option<&sddpm::search::auto::AutoReport>) -> sddpm::Result<()> {
+    use sddpm::search::generate::{fit_score, fit_score_cells, polycube_samples, precheck, prepare_input, without_fit_limit, OrientationSearch, FIT_SAMPLES};
     use sddpm::polycube::orientation::AxisRotation;
     let input = prepare_input(mesh, popts)?;
     let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
@@ -125,8 +125,8 @@ fn diagnose(truth: &sddpm::context::Context, mesh: &TriMesh, popts: &PolycubeOpt
 /// RECOVERY_DUMP=FILE: appends one JSON line per automated candidate (group, case,
 /// context, stage, score, whether it is the truth, its per-cell geometric fits and
 /// per-cell target PCD and nearest-other-template PCD), for studying rankings offline.
-fn dump_candidates(path: &std::path::Path, group: &str, case: usize, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::context::generate::PolycubeResult, truth_solid: &sddpm::geometry::VoxelGrid) -> sddpm::Result<()> {
-    use sddpm::context::generate::{fit_score_cells, polycube_samples, prepare_input, FIT_SAMPLES};
+fn dump_candidates(path: &std::path::Path, group: &str, case: usize, mesh: &TriMesh, popts: &PolycubeOptions, pr: &sddpm::search::generate::PolycubeResult, truth_solid: &sddpm::geometry::VoxelGrid) -> sddpm::Result<()> {
+    use sddpm::search::generate::{fit_score_cells, polycube_samples, prepare_input, FIT_SAMPLES};
     use std::io::Write as _;
     let input = prepare_input(mesh, popts)?;
     let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
@@ -251,7 +251,7 @@ fn main() -> sddpm::Result<()> {
                     r.global_candidates = auto.as_ref().map(|a| a.boxes.iter().map(|b| b.candidates).sum()).unwrap_or(0);
                     r.kept = pr.candidates.len();
                     r.verified = pr.candidates.iter().filter(|c| c.stage == Stage::Verified).count();
-                    let same = |c: &sddpm::context::generate::Candidate| congruent(&c.context.assemble(), &truth_solid);
+                    let same = |c: &sddpm::search::generate::Candidate| congruent(&c.context.assemble(), &truth_solid);
                     r.true_among_candidates = pr.candidates.iter().any(same);
                     r.true_among_verified = pr.candidates.iter().any(|c| c.stage == Stage::Verified && same(c));
                     match pr.chosen {

@@ -12,7 +12,7 @@ use sddpm::geometry::rng::seeded_rng;
 use sddpm::diffusion::dataset::sample_cells;
 use sddpm::polycube::tensor::layout;
 use sddpm::polycube::NUM_CELLS;
-use sddpm::verify::active_points;
+use sddpm::search::verify::active_points;
 
 fn cloud(t: &[f32], ctx: &Context) -> (Vec<[f64; 3]>, Vec<[u8; 3]>) {
     let palette = [[40u8, 90, 170], [200, 90, 40], [50, 150, 70], [160, 60, 150], [120, 120, 120], [200, 170, 40]];

@@ -7,14 +7,14 @@
 //! target's hole axis. Args: SEED N MIN MAX CASE (the case of `eval-model --cases N
 //! --min MIN --max MAX --seed SEED`).
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use sddpm::context::generate::generate_from_contexts;
-use sddpm::context::generate::PolycubeOptions;
+use sddpm::search::generate::generate_from_contexts;
+use sddpm::search::generate::PolycubeOptions;
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
-use sddpm::polycube::synthetic::{cases, SyntheticOptions};
+use sddpm::search::synthetic::{cases, SyntheticOptions};
 use sddpm::polycube::Primitive;
 use sddpm::polycube::assembly::shared_faces;
-use sddpm::verify::{active_points, cached_templates, local_points, visible_part};
+use sddpm::search::verify::{active_points, cached_templates, local_points, visible_part};
 
 fn half(from: &[[f64; 3]], to: &[[f64; 3]], tau: f64) -> f64 {
     let t = ImmutableKdTree::new_from_slice(to).unwrap();

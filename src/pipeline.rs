@@ -2,8 +2,8 @@
 //! a request (complete contexts, partial constraints, splitting ratios or the
 //! automated search), then (in later stages) the hex mesh and the spline.
 
-use crate::context::auto::{auto_failure, generate_auto, AutoOptions, AutoReport, SplitRatios};
-use crate::context::generate::{generate_from_contexts, PolycubeOptions, PolycubeResult};
+use crate::search::auto::{auto_failure, generate_auto, AutoOptions, AutoReport, SplitRatios};
+use crate::search::generate::{generate_from_contexts, PolycubeOptions, PolycubeResult};
 use crate::context::{Constraints, Context};
 use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
@@ -84,7 +84,7 @@ pub fn generate_polycube(
 
 // ------------------------------------------------------------------ the whole job
 
-use crate::context::generate::Candidate;
+use crate::search::generate::Candidate;
 use crate::error::SubProgress;
 use crate::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
 use crate::spline::{build_spline, Spline, SplineOptions};
@@ -256,7 +256,7 @@ pub fn run(
     order.truncate(opts.hex_candidates.max(1));
     let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
     let voxel = !hex.from_polycube();
-    let verified = !voxel && pr.candidates[candidate].stage == crate::context::generate::Stage::Verified;
+    let verified = !voxel && pr.candidates[candidate].stage == crate::search::generate::Stage::Verified;
     let verification_error = match (verified, verification_error) {
         (true, _) => None,
         (false, _) if voxel => Some(format!(
@@ -306,7 +306,7 @@ pub fn run(
 
 /// Verified candidates, the chosen one first, then by score.
 pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..pr.candidates.len()).filter(|&i| pr.candidates[i].stage == crate::context::generate::Stage::Verified).collect();
+    let mut order: Vec<usize> = (0..pr.candidates.len()).filter(|&i| pr.candidates[i].stage == crate::search::generate::Stage::Verified).collect();
     order.sort_by(|&a, &b| {
         let sa = pr.candidates[a].score.unwrap_or(f64::INFINITY);
         let sb = pr.candidates[b].score.unwrap_or(f64::INFINITY);
@@ -323,7 +323,7 @@ pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
 /// that passed GOCC before those that failed it, then by the geometric fit of the
 /// input to the polycube.
 pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
-    use crate::context::generate::Stage;
+    use crate::search::generate::Stage;
     let mut v: Vec<usize> = (0..pr.candidates.len())
         .filter(|&i| pr.candidates[i].input.is_some() && matches!(pr.candidates[i].stage, Stage::Tcv | Stage::Gocc | Stage::Verified))
         .collect();
@@ -339,7 +339,7 @@ pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
 /// sampled input, computed on the first call and shared by the later ones.
 fn prepare_candidate_input(
     pr: &mut PolycubeResult,
-    prepared: &mut Option<crate::context::generate::PreparedInput>,
+    prepared: &mut Option<crate::search::generate::PreparedInput>,
     mesh: &TriMesh,
     opts: &PolycubeOptions,
     i: usize,
@@ -348,7 +348,7 @@ fn prepare_candidate_input(
         return true;
     }
     if prepared.is_none() {
-        let Ok(p) = crate::context::generate::prepare_input(mesh, opts) else { return false };
+        let Ok(p) = crate::search::generate::prepare_input(mesh, opts) else { return false };
         *prepared = Some(p);
     }
     let Some(input) = prepared.as_ref() else { return false };
@@ -356,7 +356,7 @@ fn prepare_candidate_input(
     const RELAYOUT_SEED: u64 = 0x9e37;
     const RELAYOUT_STREAM: u64 = 0xfa11;
     let mut rng = crate::geometry::rng::seeded_rng(opts.seed ^ RELAYOUT_SEED, RELAYOUT_STREAM);
-    match crate::polycube::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
+    match crate::search::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
         Ok(inp) => {
             pr.candidates[i].input = Some(inp);
             true
@@ -413,7 +413,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
             if c.context.validity().genus == Some(0) {
                 c.labels = c.context.label_values();
                 c.fit = f64::INFINITY; // not measured
-                c.stage = crate::context::generate::Stage::Occupancy;
+                c.stage = crate::search::generate::Stage::Occupancy;
                 c.report = None;
                 c.fidelity = None;
                 c.score = None;

@@ -123,8 +123,8 @@ fn cancel_at_every_stage() {
 /// diffusion, ...) can be cancelled too.
 #[test]
 fn cancel_at_every_stage_of_the_automated_mode() {
-    use sddpm::context::auto::AutoOptions;
-    use sddpm::context::generate::PolycubeOptions;
+    use sddpm::search::auto::AutoOptions;
+    use sddpm::search::generate::PolycubeOptions;
     use sddpm::pipeline::generate_polycube;
     let model = Model::default_model().unwrap();
     let hole = input("cgal_hole.off");

@@ -2,8 +2,8 @@
 //! there, and every status is produced by a real call in this file (through the Rust
 //! API, whose `Error::status()` is exactly what the C ABI returns).
 
-use sddpm::context::generate::PolycubeOptions;
-use sddpm::context::auto::AutoOptions;
+use sddpm::search::generate::PolycubeOptions;
+use sddpm::search::auto::AutoOptions;
 use sddpm::context::Context;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::{Error, NoProgress, Status};

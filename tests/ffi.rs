@@ -328,7 +328,7 @@ fn polycube_options_default_and_a_bad_neighbour_ratio() {
     unsafe {
         let mut o = std::mem::zeroed::<SddpmPolycubeOptions>();
         assert_eq!(sddpm_polycube_options_default(&mut o), Status::Ok);
-        let core = sddpm::context::generate::PolycubeOptions::default();
+        let core = sddpm::search::generate::PolycubeOptions::default();
         assert_eq!(o.neighbour_fit_ratio, core.neighbour_fit_ratio);
         assert_eq!(o.max_fit, core.max_fit);
         let (model, mesh, ctx) = hole_handles();

@@ -1,6 +1,6 @@
 //! Pieces shared by the commands: loading a checked mesh, progress on stderr, JSON files.
 
-use sddpm::context::generate::{Candidate, PolycubeResult};
+use sddpm::search::generate::{Candidate, PolycubeResult};
 use sddpm::error::Error;
 use sddpm::mesh::{LoadOptions, MeshReport, TriMesh};
 use sddpm::Result;

@@ -1,7 +1,7 @@
 //! `sddpm eval-model`: measure a model on held-in synthetic inputs (developer command).
 
-use sddpm::context::generate::PolycubeOptions;
-use sddpm::diffusion::eval::evaluate;
+use sddpm::search::generate::PolycubeOptions;
+use sddpm::search::eval::evaluate;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::Result;
 use std::path::PathBuf;
@@ -110,7 +110,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if a.sweep {
         let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];
         let ps = [1.0, 2.0];
-        let (rows, gocc) = sddpm::diffusion::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps)?;
+        let (rows, gocc) = sddpm::search::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps)?;
         println!("| tau_CD | p | true accepted | target nearest (cells) | wrong accepted |");
         println!("|---|---|---|---|---|");
         for r in &rows {
@@ -121,7 +121,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
         println!("|---|---:|---:|---:|---:|---:|");
         for (name, truth) in [("true", true), ("wrong", false)] {
             let g: Vec<_> = gocc.iter().filter(|s| s.truth == truth).collect();
-            let lo = |f: fn(&sddpm::diffusion::eval::GoccSample) -> f64| g.iter().map(|s| f(s)).fold(f64::INFINITY, f64::min);
+            let lo = |f: fn(&sddpm::search::eval::GoccSample) -> f64| g.iter().map(|s| f(s)).fold(f64::INFINITY, f64::min);
             let hi = g.iter().map(|s| s.null_fraction).fold(0.0, f64::max);
             println!("| {name} | {} | {} | {:.3} | {:.3} | {:.4} |", g.len(), g.iter().filter(|s| s.gocc_pass).count(), lo(|s| s.min_span), lo(|s| s.min_inside), hi);
         }

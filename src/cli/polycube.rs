@@ -1,8 +1,8 @@
 //! `sddpm polycube MESH -o DIR [--labels L | --constraints FILE | --auto] [--ratios R] [--seed N]`
 
 use super::common::{load_checked, to_user_polycube, write_json, Loaded};
-use sddpm::context::auto::{AutoOptions, SplitRatios};
-use sddpm::context::generate::PolycubeOptions;
+use sddpm::search::auto::{AutoOptions, SplitRatios};
+use sddpm::search::generate::PolycubeOptions;
 use sddpm::context::{Constraints, Context};
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::Error;

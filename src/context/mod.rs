@@ -1,9 +1,7 @@
 //! Contexts: the 12-cell labelling of the G(3x2x2) grid, its 132-d one-hot encoding,
-//! and the expansion of partial constraints (counts + spatial arrangement) into every
-//! valid context that satisfies them.
-
-pub mod auto;
-pub mod generate;
+//! the expansion of partial constraints (counts + spatial arrangement) into every
+//! valid context that satisfies them, and a context's normalised frame
+//! ([`context_frame`]).
 
 use crate::error::{Error, Result};
 use crate::geometry::VoxelGrid;

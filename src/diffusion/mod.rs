@@ -1,12 +1,12 @@
 //! The generative core: the nonzero-mean diffusion schedule, the context-conditioned
-//! U-Net, training, the weights files and reverse diffusion.
+//! U-Net, its training data set ([`dataset`]), training, the weights files and
+//! reverse diffusion.
 //!
 //! The compute device is chosen here and only here ([`Backend`], [`device`]): burn's
 //! pure-Rust `flex` CPU backend by default, burn-ndarray behind the `ndarray` cargo
 //! feature, and GPU backends behind `wgpu` / `cuda`.
 
 pub mod dataset;
-pub mod eval;
 pub mod field;
 pub mod model;
 pub mod sample;

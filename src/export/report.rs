@@ -196,8 +196,8 @@ th{background:#f2f2f2}.pics img{border:1px solid #ddd;margin:4px;max-width:32%}.
     ]));
     s.push_str("<h3>Candidates (best 40 by stage and score)</h3><table><tr><th>#</th><th>context</th><th>rotation</th><th>stage</th><th>fit</th><th>score</th><th>mean target PCD</th><th>reason</th></tr>");
     let mut idx: Vec<usize> = (0..r.polycube.candidates.len()).collect();
-    let rank = |st: crate::context::generate::Stage| {
-        use crate::context::generate::Stage::*;
+    let rank = |st: crate::search::generate::Stage| {
+        use crate::search::generate::Stage::*;
         match st {
             Verified => 0,
             Tcv => 1,

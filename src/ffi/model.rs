@@ -3,8 +3,8 @@
 
 use super::context::SddpmContext;
 use super::{ffi_boundary, non_null, CProgress, SddpmConstraints, SddpmMesh, SddpmProgressCb};
-use crate::context::auto::{AutoOptions, AutoReport, SplitRatios};
-use crate::context::generate::{OrientationSearch, PolycubeOptions, PolycubeResult, Stage};
+use crate::search::auto::{AutoOptions, AutoReport, SplitRatios};
+use crate::search::generate::{OrientationSearch, PolycubeOptions, PolycubeResult, Stage};
 use crate::diffusion::{Backend, Model};
 use crate::error::{Error, Result, Status};
 use crate::pipeline::{generate_polycube, ContextRequest};

@@ -1,5 +1,5 @@
 //! The indexed triangle mesh every stage works on. Reading, welding and checking
-//! one is the mesh stage's (`crate::mesh`); what is here needs nothing but the
+//! one is the mesh stage's (`mesh`); what is here needs nothing but the
 //! arrays.
 
 /// An indexed triangle mesh in f64. Triangles are counter-clockwise seen from outside

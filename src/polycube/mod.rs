@@ -2,10 +2,8 @@
 //! assembly on the 9x6x6 sub-voxel lattice, and the point tensors of the model.
 
 pub mod assembly;
-pub mod inference;
 pub mod orientation;
 pub mod primitive;
-pub mod synthetic;
 pub mod tensor;
 
 pub use assembly::{assemble, boundary, check, QuadMesh, Validity};

@@ -3,12 +3,12 @@
 //! with the correspondence (tensor slot -> point on the input surface) and the cheap
 //! occupancy pre-check that rejects a context before any diffusion.
 
-use super::orientation::AxisRotation;
-use super::primitive::{cell_coords, cell_index, Primitive, NUM_CELLS};
-use super::tensor::{layout, sort_order, BoxFrame, POINTS_PER_CELL};
 use crate::context::{context_frame, Context};
 use crate::error::{Error, Result};
 use crate::geometry::SurfaceSample;
+use crate::polycube::orientation::AxisRotation;
+use crate::polycube::primitive::{cell_coords, cell_index, Primitive, NUM_CELLS};
+use crate::polycube::tensor::{layout, sort_order, BoxFrame, POINTS_PER_CELL};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -78,7 +78,7 @@ pub struct InferenceInput {
 /// The normalised box of a context's occupied cells, as (lo, hi) in the model's frame.
 pub fn context_box(ctx: &Context) -> Option<(BoxFrame, [f64; 3], [f64; 3])> {
     let frame = context_frame(ctx)?;
-    let (lo, hi) = super::assembly::occupied_cell_box(&ctx.labels)?;
+    let (lo, hi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels)?;
     Some((frame, frame.to_normalised(lo.map(|v| v as f64)), frame.to_normalised(hi.map(|v| v as f64))))
 }
 
@@ -131,7 +131,7 @@ pub fn cell_of(frame: &BoxFrame, lo: [usize; 3], hi: [usize; 3], labels: &[Primi
 /// same occupied cells.
 pub fn occupancy_only(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, min_occupied_fraction: f64) -> Option<Occupancy> {
     let (frame, dlo, dhi) = context_box(ctx)?;
-    let (glo, ghi) = super::assembly::occupied_cell_box(&ctx.labels)?;
+    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels)?;
     let mut slo = [f64::INFINITY; 3];
     let mut shi = [f64::NEG_INFINITY; 3];
     let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
@@ -169,7 +169,7 @@ pub fn prepare(
     }
     let (frame, dlo, dhi) =
         context_box(ctx).ok_or_else(|| Error::InvalidContext("the context has no occupied cell".into()))?;
-    let (glo, ghi) = super::assembly::occupied_cell_box(&ctx.labels).unwrap();
+    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
     let mut slo = [f64::INFINITY; 3];
     let mut shi = [f64::NEG_INFINITY; 3];
     for s in samples {

@@ -3,16 +3,16 @@
 //! exact polycube per category, and the rate at which a wrong but genus-consistent
 //! context is rejected.
 
-use super::Model;
-use crate::context::generate::{generate_from_contexts, Candidate, PolycubeOptions, Stage};
+use super::generate::{generate_from_contexts, Candidate, PolycubeOptions, Stage};
+use super::synthetic::{cases, SyntheticOptions};
+use super::verify::chamfer;
 use crate::context::Context;
+use crate::diffusion::dataset::sample_cells;
+use crate::diffusion::Model;
 use crate::error::{NoProgress, Result};
 use crate::geometry::rng::seeded_rng;
-use crate::diffusion::dataset::sample_cells;
-use crate::polycube::synthetic::{cases, SyntheticOptions};
 use crate::polycube::tensor::unlayout;
 use crate::polycube::{Primitive, NUM_CELLS};
-use crate::verify::chamfer;
 use serde::Serialize;
 
 /// Seed mixer of the exact polycube's samples a case's output is compared with.
@@ -110,7 +110,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
             s.failures.push(format!("case {i} {ctx}: {why}"));
         }
         if let Some(inp) = &c.input {
-            let rep = crate::verify::verify(&inp.tensor, &ctx, &inp.frame, &opts.verify);
+            let rep = crate::search::verify::verify(&inp.tensor, &ctx, &inp.frame, &opts.verify);
             if rep.passed {
                 s.input_tcv_passed += 1;
             } else {
@@ -170,7 +170,7 @@ pub fn evaluate(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts
 struct SweepCell {
     local: Vec<[f64; 3]>,
     target: Primitive,
-    /// Faces shared with occupied neighbours (`verify::shared_faces`) when the options
+    /// Faces shared with occupied neighbours (`polycube::assembly::shared_faces`) when the options
     /// ask for visible coverage, else 0 (coverage over the whole template).
     shared: u8,
 }
@@ -208,7 +208,7 @@ pub struct GoccSample {
 
 fn gocc_sample(c: &Candidate, truth: bool) -> Option<GoccSample> {
     let r = c.report.as_ref()?;
-    let occ: Vec<&crate::verify::CellReport> = r.cells.iter().filter(|cr| c.context.labels[cr.cell] != Primitive::Null).collect();
+    let occ: Vec<&crate::search::verify::CellReport> = r.cells.iter().filter(|cr| c.context.labels[cr.cell] != Primitive::Null).collect();
     Some(GoccSample {
         truth,
         gocc_pass: r.gocc_pass,
@@ -230,7 +230,7 @@ fn gocc_sample(c: &Candidate, truth: bool) -> Option<GoccSample> {
 pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<(Vec<SweepRow>, Vec<GoccSample>)> {
     let mut gocc: Vec<GoccSample> = Vec::new();
     let synth = SyntheticOptions::default();
-    let tpl = crate::verify::cached_templates(opts.verify.template_points);
+    let tpl = crate::search::verify::cached_templates(opts.verify.template_points);
     let mut truth: Vec<Vec<SweepCell>> = Vec::new();
     let mut wrong: Vec<Vec<SweepCell>> = Vec::new();
     let collect = |c: &Candidate| -> Option<Vec<SweepCell>> {
@@ -242,7 +242,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
             c.context
                 .occupied()
                 .map(|k| SweepCell {
-                    local: crate::verify::local_points(&crate::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale),
+                    local: crate::search::verify::local_points(&crate::search::verify::active_points(out, k, opts.verify.zero_norm), inp.frame.scale),
                     target: c.context.labels[k],
                     shared: if opts.verify.visible_coverage { crate::polycube::assembly::shared_faces(&c.context.labels, k) } else { 0 },
                 })
@@ -259,8 +259,8 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
         let f: Vec<f64> = match (c.output.as_ref(), c.input.as_ref()) {
             (Some(out), Some(inp)) => {
                 let s = inp.frame.scale;
-                let scaled = |t: &[f32], k: usize| -> Vec<[f64; 3]> { crate::verify::active_points(t, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect() };
-                cells.iter().map(|&k| crate::verify::pcd(&scaled(out, k), &scaled(&inp.tensor, k), 0.01, 2.0)).collect()
+                let scaled = |t: &[f32], k: usize| -> Vec<[f64; 3]> { crate::search::verify::active_points(t, k, opts.verify.zero_norm).iter().map(|p| p.map(|v| v / s)).collect() };
+                cells.iter().map(|&k| crate::search::verify::pcd(&scaled(out, k), &scaled(&inp.tensor, k), 0.01, 2.0)).collect()
             }
             _ => Vec::new(),
         };
@@ -297,7 +297,7 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 let mut all = true;
                 let mut nearest = 0;
                 for c in cells {
-                    let d: Vec<f64> = Primitive::solids().map(|q| crate::verify::cell_pcd(&c.local, &tpl[q.label() as usize], c.shared, tau, p)).collect();
+                    let d: Vec<f64> = Primitive::solids().map(|q| crate::search::verify::cell_pcd(&c.local, &tpl[q.label() as usize], c.shared, tau, p)).collect();
                     let dt = d[c.target.label() as usize - 1];
                     let best = d.iter().cloned().fold(f64::INFINITY, f64::min);
                     let near = dt <= best;

@@ -19,8 +19,8 @@
 //! context occupies.
 
 use crate::context::Context;
-use crate::geometry::rng::seeded_rng;
 use crate::diffusion::dataset::sample_primitive;
+use crate::geometry::rng::seeded_rng;
 use crate::polycube::assembly::shared_faces;
 use crate::polycube::tensor::{unlayout, BoxFrame, TENSOR_LEN};
 use crate::polycube::{cell_coords, Primitive, NUM_CELLS, NUM_LABELS};
@@ -416,7 +416,7 @@ mod tests {
 
     #[test]
     fn an_assembled_surface_passes_when_shared_faces_leave_the_coverage() {
-        use crate::polycube::inference::prepare;
+        use crate::search::inference::prepare;
         use crate::polycube::orientation::AxisRotation;
         // Eight occupied cells, most of them touching two or three others: the
         // assembled surface has nothing on the faces they share (nor on the hole

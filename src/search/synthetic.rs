@@ -4,11 +4,11 @@
 //! None of these shapes is in the training set (which holds exact, axis-aligned,
 //! normalised primitive samples).
 
-use super::assembly::{assemble, boundary, check};
-use crate::geometry::rng::seeded_rng;
-use super::primitive::{Primitive, NUM_CELLS};
 use crate::context::{valid_cube_occupancies, Context};
+use crate::geometry::rng::seeded_rng;
 use crate::mesh::TriMesh;
+use crate::polycube::assembly::{assemble, boundary, check};
+use crate::polycube::primitive::{Primitive, NUM_CELLS};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};

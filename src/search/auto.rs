@@ -23,13 +23,13 @@ use super::generate::{
     diffuse_and_verify, finish, lay_out, fit_score_cells, fit_score_scaled, limit_fit, polycube_samples, precheck, worst_and_mean, prepare_input, without_fit_limit, Candidate, OrientationSearch,
     PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES,
 };
-use super::Context;
+use crate::context::Context;
 use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
+use crate::geometry::rng::seeded_rng;
 use crate::geometry::voxel::{betti, voxelize, VoxelVolume};
 use crate::geometry::{SurfaceSample, VoxelGrid};
 use crate::mesh::TriMesh;
-use crate::geometry::rng::seeded_rng;
 use crate::polycube::orientation::AxisRotation;
 use crate::polycube::{Family, Primitive, NUM_CELLS};
 use rand::RngExt;
@@ -928,7 +928,7 @@ pub fn suggest_ratios(vol: &VoxelVolume, lo: [f64; 3], hi: [f64; 3]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::context::generate::fit_score;
+    use crate::search::generate::fit_score;
 
     /// A closed box [0, a] x [0, b] x [0, c], 12 outward triangles.
     fn box_mesh(a: f64, b: f64, c: f64) -> TriMesh {
