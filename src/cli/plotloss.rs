@@ -1,7 +1,7 @@
 //! `sddpm plot-loss CSV -o DIR`: the training loss curve, its last part and its
-//! gradient as PNG plots (the training run also writes them at every checkpoint).
+//! gradient as PNG plots (`sddpm train` also draws them at every checkpoint).
 
-use sddpm::diffusion::train::plot_loss;
+use sddpm::export::plot::plot_loss;
 use sddpm::Result;
 use std::path::PathBuf;
 

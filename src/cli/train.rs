@@ -1,6 +1,7 @@
 //! `sddpm train -o FILE [--epochs N] [--seed 42] [--resume CKPT]`
 
-use sddpm::diffusion::train::{checkpoint_dir_for, train, TrainConfig, TrainEvent};
+use sddpm::diffusion::train::{checkpoint_dir_for, train, TrainConfig, TrainEvent, LOSS_CSV};
+use sddpm::export::plot::plot_loss;
 use sddpm::Result;
 use std::path::PathBuf;
 
@@ -165,6 +166,11 @@ pub fn run(a: &TrainArgs) -> Result<i32> {
     }
     let quiet = a.quiet;
     let meta = train(&cfg, &a.output, a.resume.as_deref(), &mut |ev| {
+        if let TrainEvent::EpochDone { checkpoint, .. } = &ev {
+            // the loss curve next to its CSV at every checkpoint; a plotting failure
+            // never stops a training run
+            let _ = plot_loss(&checkpoint.join(LOSS_CSV), checkpoint, 20);
+        }
         if !quiet {
             match ev {
                 TrainEvent::Log(r) => eprintln!(

@@ -157,13 +157,17 @@ pub enum TrainEvent<'a> {
 }
 
 pub(super) fn checkpoint_files(dir: &Path) -> (PathBuf, PathBuf, PathBuf, PathBuf) {
-    (dir.join("state.json"), dir.join("net.bpk"), dir.join("optim.bpk"), dir.join("loss.csv"))
+    (dir.join("state.json"), dir.join("net.bpk"), dir.join("optim.bpk"), dir.join(LOSS_CSV))
 }
 
 /// Adam with gradient-norm clipping at 1 (guards the first steps of a fresh network).
 pub(super) fn adam() -> burn::optim::ModuleOptimizer {
     AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(1.0))).init()
 }
+
+/// The loss log of a checkpoint folder (step, epoch, loss; one row every 25 steps),
+/// read by [`read_loss_csv`].
+pub const LOSS_CSV: &str = "loss.csv";
 
 /// The checkpoint folder used for an output weights path: `<out>.ckpt/`.
 pub fn checkpoint_dir_for(out: &Path) -> PathBuf {
@@ -472,8 +476,6 @@ fn save_checkpoint(
     opt.save(&tmp).map_err(|e| Error::Model(format!("{}: {e:?}", tmp.display())))?;
     std::fs::rename(&tmp, &optf).map_err(io(&optf))?;
     let state = CheckpointState { config: cfg.clone(), epochs_done, steps_done, seconds, last_loss };
-    // the loss curve next to its CSV; a plotting failure never stops a training run
-    let _ = plot_loss(&checkpoint_files(dir).3, dir, 20);
     let tmp = st.with_extension("tmp");
     std::fs::write(&tmp, serde_json::to_vec_pretty(&state).unwrap()).map_err(io(&tmp))?;
     std::fs::rename(&tmp, &st).map_err(io(&st))
@@ -492,45 +494,4 @@ pub fn read_loss_csv(path: &Path) -> Result<Vec<(usize, f64, f64)>> {
         }
     }
     Ok(v)
-}
-
-/// Plot a loss log (`loss.csv` of a checkpoint folder) as three PNGs in `dir`:
-/// loss.png (whole run, log scale, raw and a moving average over `window` log
-/// entries), loss_tail.png (the last 20 % of the steps, linear scale) and
-/// loss_gradient.png (d loss / d epoch of the moving average). Returns the file names.
-pub fn plot_loss(csv: &Path, dir: &Path, window: usize) -> Result<Vec<String>> {
-    use crate::export::plot::{line_png, Series};
-    let rows = read_loss_csv(csv)?;
-    if rows.len() < 2 {
-        return Err(Error::InvalidArgument(format!("{}: fewer than two loss entries", csv.display())));
-    }
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let w = window.max(1);
-    let raw: Vec<(f64, f64)> = rows.iter().map(|r| (r.1, r.2)).collect();
-    let smooth: Vec<(f64, f64)> = (0..rows.len())
-        .map(|i| {
-            let lo = i.saturating_sub(w / 2);
-            let hi = (i + w / 2 + 1).min(rows.len());
-            (rows[i].1, rows[lo..hi].iter().map(|r| r.2).sum::<f64>() / (hi - lo) as f64)
-        })
-        .collect();
-    let mut names = Vec::new();
-    let p = dir.join("loss.png");
-    line_png(&p, &[Series { name: "loss (logged every 25 steps)", points: raw.clone() }, Series { name: "moving average", points: smooth.clone() }], "Training loss (MSE on the noise)", "epoch", "loss", true)?;
-    names.push("loss.png".to_string());
-    let cut = rows.len() * 4 / 5;
-    let p = dir.join("loss_tail.png");
-    line_png(&p, &[Series { name: "loss", points: raw[cut..].to_vec() }, Series { name: "moving average", points: smooth[cut..].to_vec() }], "Training loss, last 20 % of the steps", "epoch", "loss", false)?;
-    names.push("loss_tail.png".to_string());
-    let grad: Vec<(f64, f64)> = smooth
-        .windows(2)
-        .filter(|s| s[1].0 > s[0].0)
-        .map(|s| (0.5 * (s[0].0 + s[1].0), (s[1].1 - s[0].1) / (s[1].0 - s[0].0)))
-        .collect();
-    if grad.len() >= 2 {
-        let p = dir.join("loss_gradient.png");
-        line_png(&p, &[Series { name: "d loss / d epoch (moving average)", points: grad }], "Gradient of the training loss", "epoch", "d loss / d epoch", false)?;
-        names.push("loss_gradient.png".to_string());
-    }
-    Ok(names)
 }

@@ -235,15 +235,13 @@ fn noisy_batch<'a>(
 
 #[allow(clippy::too_many_arguments)]
 fn save(cfg: &TrainConfig, dir: &Path, net: &FieldNet, opt: &burn::optim::ModuleOptimizer, epochs_done: usize, steps_done: usize, seconds: f64, last_loss: f64) -> Result<()> {
-    let (st, netf, optf, csv) = checkpoint_files(dir);
+    let (st, netf, optf, _) = checkpoint_files(dir);
     let tmp = netf.with_extension("tmp");
     std::fs::write(&tmp, module_bytes(net.clone())?).map_err(io(&tmp))?;
     std::fs::rename(&tmp, &netf).map_err(io(&netf))?;
     let tmp = optf.with_extension("tmp");
     opt.save(&tmp).map_err(|e| Error::Model(format!("{}: {e:?}", tmp.display())))?;
     std::fs::rename(&tmp, &optf).map_err(io(&optf))?;
-    // the loss curve next to its CSV; a plotting failure never stops a training run
-    let _ = super::train::plot_loss(&csv, dir, 20);
     let state = CheckpointState { config: cfg.clone(), epochs_done, steps_done, seconds, last_loss };
     let tmp = st.with_extension("tmp");
     std::fs::write(&tmp, serde_json::to_vec_pretty(&state).unwrap_or_default()).map_err(io(&tmp))?;

@@ -3,6 +3,7 @@
 //! (assets/fonts, Bitstream Vera licence), so plots render the same on a machine
 //! without any font installed.
 
+use crate::diffusion::train::read_loss_csv;
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
@@ -239,4 +240,45 @@ pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) 
         .map_err(|e| plot_err(path, e))?;
     root.present().map_err(|e| plot_err(path, e))?;
     Ok(())
+}
+
+/// Plot a training loss log (`loss.csv` of a checkpoint folder,
+/// [`crate::diffusion::train::read_loss_csv`]) as three PNGs in `dir`:
+/// loss.png (whole run, log scale, raw and a moving average over `window` log
+/// entries), loss_tail.png (the last 20 % of the steps, linear scale) and
+/// loss_gradient.png (d loss / d epoch of the moving average). Returns the file names.
+pub fn plot_loss(csv: &Path, dir: &Path, window: usize) -> Result<Vec<String>> {
+    let rows = read_loss_csv(csv)?;
+    if rows.len() < 2 {
+        return Err(Error::InvalidArgument(format!("{}: fewer than two loss entries", csv.display())));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
+    let w = window.max(1);
+    let raw: Vec<(f64, f64)> = rows.iter().map(|r| (r.1, r.2)).collect();
+    let smooth: Vec<(f64, f64)> = (0..rows.len())
+        .map(|i| {
+            let lo = i.saturating_sub(w / 2);
+            let hi = (i + w / 2 + 1).min(rows.len());
+            (rows[i].1, rows[lo..hi].iter().map(|r| r.2).sum::<f64>() / (hi - lo) as f64)
+        })
+        .collect();
+    let mut names = Vec::new();
+    let p = dir.join("loss.png");
+    line_png(&p, &[Series { name: "loss (logged every 25 steps)", points: raw.clone() }, Series { name: "moving average", points: smooth.clone() }], "Training loss (MSE on the noise)", "epoch", "loss", true)?;
+    names.push("loss.png".to_string());
+    let cut = rows.len() * 4 / 5;
+    let p = dir.join("loss_tail.png");
+    line_png(&p, &[Series { name: "loss", points: raw[cut..].to_vec() }, Series { name: "moving average", points: smooth[cut..].to_vec() }], "Training loss, last 20 % of the steps", "epoch", "loss", false)?;
+    names.push("loss_tail.png".to_string());
+    let grad: Vec<(f64, f64)> = smooth
+        .windows(2)
+        .filter(|s| s[1].0 > s[0].0)
+        .map(|s| (0.5 * (s[0].0 + s[1].0), (s[1].1 - s[0].1) / (s[1].0 - s[0].0)))
+        .collect();
+    if grad.len() >= 2 {
+        let p = dir.join("loss_gradient.png");
+        line_png(&p, &[Series { name: "d loss / d epoch (moving average)", points: grad }], "Gradient of the training loss", "epoch", "d loss / d epoch", false)?;
+        names.push("loss_gradient.png".to_string());
+    }
+    Ok(names)
 }
