@@ -113,7 +113,7 @@ fn run_folder_files_and_report_keys() {
     let r = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut NoProgress).unwrap();
     let out = fixtures().join("run");
     std::fs::create_dir_all(&out).unwrap();
-    sddpm::hex::write_hex_files(&out, &r).unwrap();
+    sddpm::export::hexfmt::write_hex_files(&out, &r).unwrap();
     let j = sddpm::hex::report_json(&r);
     for key in ["vertices", "elements", "min_scaled_jacobian", "mean_scaled_jacobian", "inverted", "hausdorff_relative", "file"] {
         assert!(j.get(key).is_some(), "report.json hex.{key} missing");

@@ -218,7 +218,7 @@ fn spline_write_outputs_for_the_pipeline() {
     let sp = refined_spline();
     let d = tmpdir();
     let dir = d.path().join("run");
-    let j = sddpm::spline::write_outputs(&dir, &sp, &Default::default()).unwrap();
+    let j = sddpm::export::spline_files::write_outputs(&dir, &sp, &Default::default()).unwrap();
     for k in ["elements", "basis_functions", "bext", "lsdyna", "min_scaled_jacobian"] {
         assert!(j.get(k).is_some(), "{k}");
     }

@@ -4,9 +4,12 @@
 //! files back. All keep the VTK_HEXAHEDRON node order (bottom face 0-3
 //! counter-clockwise seen from the top face, top face 4-7 above it), which is also
 //! LS-DYNA's positive-volume order for 8-node solids; Medit and LS-DYNA ids are 1-based.
+//! [`write_hex_files`] writes the hex stage's files of a run folder.
 
 use crate::error::{Error, Result};
-use crate::hex::HexMesh;
+use super::vtk::write_vtk_legacy;
+use crate::hex::report::{HEX_K, HEX_MESH, HEX_VTK, HEX_VTU};
+use crate::hex::{HexMesh, HexResult};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -422,4 +425,15 @@ mod tests {
         assert!(parse_medit("MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\nHexahedra\n1\n1 2 3 4 5 6 7 8 1\nEnd\n").is_err());
         assert!(parse_lsdyna("*NODE\n1,0,0,0\n*ELEMENT_SOLID\n1,1,1,2,3,4,5,6,7,9\n").is_err());
     }
+}
+
+/// Write hex.vtu, hex.vtk (both with the cell data "scaled_jacobian"), hex.mesh and
+/// hex.k (the names of [`crate::hex::report`]) into `dir` (which must exist), all in user coordinates.
+pub fn write_hex_files(dir: &Path, r: &HexResult) -> Result<()> {
+    let sj: &[f64] = &r.scaled_jacobian;
+    write_vtu(&dir.join(HEX_VTU), &r.mesh, &[("scaled_jacobian", sj)])?;
+    write_vtk_legacy(&dir.join(HEX_VTK), &r.mesh, "sddpm hex mesh", &[("scaled_jacobian", sj)])?;
+    write_medit(&dir.join(HEX_MESH), &r.mesh)?;
+    write_lsdyna(&dir.join(HEX_K), &r.mesh, "sddpm hex mesh")?;
+    Ok(())
 }

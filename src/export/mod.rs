@@ -6,6 +6,7 @@ pub mod bext;
 pub mod hexfmt;
 pub mod lsdyna;
 pub mod spline_vtk;
+pub mod spline_files;
 pub mod plot;
 pub mod render;
 pub mod report;

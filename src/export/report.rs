@@ -39,13 +39,13 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
     let cand = &r.polycube.candidates[r.candidate];
     let poly = crate::pipeline::polycube_user_mesh(&r.polycube, cand);
     crate::export::obj::write_obj(&dir.join(POLYCUBE_OBJ), &poly, &format!("libsddpm polycube {} (user coordinates)", cand.context))?;
-    crate::hex::write_hex_files(dir, &r.hex)?;
+    crate::export::hexfmt::write_hex_files(dir, &r.hex)?;
     let mut hex_json = crate::hex::report_json(&r.hex);
     if let Some(m) = hex_json.as_object_mut() {
         m.insert("candidates_meshed".into(), serde_json::to_value(&r.hex_attempts).unwrap_or(Value::Null));
     }
     let spline_json = match &r.spline {
-        Some(sp) => crate::spline::write_outputs(dir, sp, &crate::spline::OutputOptions::default())?,
+        Some(sp) => crate::export::spline_files::write_outputs(dir, sp, &crate::export::spline_files::OutputOptions::default())?,
         None => Value::Null,
     };
     // pictures and plots

@@ -5,7 +5,8 @@ use super::hex::SddpmHexMesh;
 use super::mesh::SddpmMesh;
 use super::{c_path, copy_string, ffi_boundary, non_null, CProgress, SddpmProgressCb};
 use crate::error::{Error, Result, Status};
-use crate::spline::{build_spline, OutputOptions, Spline, SplineOptions};
+use crate::export::spline_files::OutputOptions;
+use crate::spline::{build_spline, Spline, SplineOptions};
 use std::ffi::{c_char, c_void};
 
 /// An opaque volumetric spline (read-only calls may come from several threads).
@@ -202,7 +203,7 @@ pub unsafe extern "C" fn sddpm_spline_write(s: *const SddpmSpline, dir: *const c
     ffi_boundary! {
         let s = sp_ref(s)?;
         let d = c_path(dir, "dir")?;
-        crate::spline::write_outputs(&d, &s.spline, &OutputOptions::default()).map(|_| ())
+        crate::export::spline_files::write_outputs(&d, &s.spline, &OutputOptions::default()).map(|_| ())
     }
 }
 

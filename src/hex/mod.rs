@@ -20,7 +20,7 @@ pub mod voxel;
 
 pub use frame::Affine;
 pub use pipeline::{build_hex_mesh, HexInput, HexOptions, HexResult, QualityGoals, LevelReport, StageReport, SurfaceMapReport};
-pub use report::{report_json, write_hex_files};
+pub use report::report_json;
 pub use voxel::build_voxel_hex_mesh;
 
 use serde::{Deserialize, Serialize};

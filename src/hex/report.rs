@@ -1,28 +1,14 @@
-//! What the hex stage hands to `sddpm run`: its files in the output folder and the
-//! "hex" object of report.json (DESIGN.md "Command line").
+//! What the hex stage hands to `sddpm run`: the names of its files in the output
+//! folder (written by `export::hexfmt::write_hex_files`) and the "hex" object of
+//! report.json (DESIGN.md "Command line").
 
 use super::pipeline::HexResult;
-use crate::error::Result;
-use crate::export::hexfmt::{write_lsdyna, write_medit, write_vtu};
-use crate::export::vtk::write_vtk_legacy;
-use std::path::Path;
 
 /// File names of the hex stage inside the output folder.
 pub const HEX_VTU: &str = "hex.vtu";
 pub const HEX_VTK: &str = "hex.vtk";
 pub const HEX_MESH: &str = "hex.mesh";
 pub const HEX_K: &str = "hex.k";
-
-/// Write hex.vtu, hex.vtk (both with the cell data "scaled_jacobian"), hex.mesh and
-/// hex.k into `dir` (which must exist), all in user coordinates.
-pub fn write_hex_files(dir: &Path, r: &HexResult) -> Result<()> {
-    let sj: &[f64] = &r.scaled_jacobian;
-    write_vtu(&dir.join(HEX_VTU), &r.mesh, &[("scaled_jacobian", sj)])?;
-    write_vtk_legacy(&dir.join(HEX_VTK), &r.mesh, "sddpm hex mesh", &[("scaled_jacobian", sj)])?;
-    write_medit(&dir.join(HEX_MESH), &r.mesh)?;
-    write_lsdyna(&dir.join(HEX_K), &r.mesh, "sddpm hex mesh")?;
-    Ok(())
-}
 
 /// The "hex" object of report.json: the keys DESIGN.md fixes (vertices, elements,
 /// min_scaled_jacobian, mean_scaled_jacobian, inverted, hausdorff_relative, file)
