@@ -5,7 +5,7 @@
 use super::common::{load_checked, write_json, Loaded};
 use super::polycube::load_model;
 use sddpm::error::{Error, NoProgress};
-use sddpm::export::report::{write_run_folder, InputInfo};
+use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, ContextRequest, RunOptions};
 use sddpm::Result;
 use rayon::prelude::*;

@@ -3,7 +3,7 @@
 use super::common::{load_checked, Loaded};
 use super::polycube::{load_model, options_of, request_of, PolycubeArgs};
 use sddpm::error::Error;
-use sddpm::export::report::{write_run_folder, InputInfo};
+use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, RunOptions};
 use sddpm::Result;
 

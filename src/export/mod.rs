@@ -1,4 +1,5 @@
-//! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT).
+//! File formats of the hex and spline stages (VTK, VTU, Medit, LS-DYNA, BEXT), the
+//! stages' files of a run folder, PNG plots and the software renderer.
 
 pub mod obj;
 pub mod vtk;
@@ -9,4 +10,3 @@ pub mod spline_vtk;
 pub mod spline_files;
 pub mod plot;
 pub mod render;
-pub mod report;

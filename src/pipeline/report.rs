@@ -1,12 +1,12 @@
 //! The run folder of the main job (DESIGN.md "Command line"): polycube.obj, the hex
 //! files, the spline files, report.json and report.html with its PNG pictures and
-//! plots. Used by `sddpm run` and available to every caller of `pipeline::run`.
+//! plots. Used by `sddpm run` and available to every caller of [`super::run`].
 
+use super::RunResult;
 use crate::error::{Error, Result};
 use crate::export::plot::{bars_png, histogram_png};
 use crate::export::render::{hex_boundary, render_png, Camera, Layer};
 use crate::mesh::{MeshReport, TriMesh};
-use crate::pipeline::RunResult;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -37,7 +37,7 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
     let t_write = std::time::Instant::now();
     let cand = &r.polycube.candidates[r.candidate];
-    let poly = crate::pipeline::polycube_user_mesh(&r.polycube, cand);
+    let poly = super::polycube_user_mesh(&r.polycube, cand);
     crate::export::obj::write_obj(&dir.join(POLYCUBE_OBJ), &poly, &format!("libsddpm polycube {} (user coordinates)", cand.context))?;
     crate::export::hexfmt::write_hex_files(dir, &r.hex)?;
     let mut hex_json = crate::hex::report_json(&r.hex);

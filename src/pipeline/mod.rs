@@ -1,13 +1,17 @@
 //! The whole job, stage by stage, as one library call each: polycube generation from
 //! a request (complete contexts, partial constraints, splitting ratios or the
-//! automated search), then (in later stages) the hex mesh and the spline.
+//! automated search), then (in later stages) the hex mesh and the spline. The run
+//! folder of the main job (report.json, report.html and every file) is written by
+//! [`report`].
 
-use crate::search::auto::{auto_failure, generate_auto, AutoOptions, AutoReport, SplitRatios};
-use crate::search::generate::{generate_from_contexts, PolycubeOptions, PolycubeResult};
+pub mod report;
+
 use crate::context::{Constraints, Context};
 use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
 use crate::mesh::TriMesh;
+use crate::search::auto::{auto_failure, generate_auto, AutoOptions, AutoReport, SplitRatios};
+use crate::search::generate::{generate_from_contexts, PolycubeOptions, PolycubeResult};
 use serde::{Deserialize, Serialize};
 
 /// How the caller asks for a polycube.
@@ -84,9 +88,9 @@ pub fn generate_polycube(
 
 // ------------------------------------------------------------------ the whole job
 
-use crate::search::generate::Candidate;
 use crate::error::SubProgress;
 use crate::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
+use crate::search::generate::Candidate;
 use crate::spline::{build_spline, Spline, SplineOptions};
 use std::time::Instant;
 
