@@ -2,7 +2,7 @@
 """Which inputs have lattice nodes on their sharp edges: for each voxel
 resolution, the voxel fallback's lattice in the working frame (the input centred
 and scaled to 2 along its longest bounding-box edge; `resolution` voxels along
-it, the lattice centred on the bounding box, as context::volume::voxelize) and
+it, the lattice centred on the bounding box, as geometry::voxel::voxelize) and
 the count of lattice points within 1e-9 of a sharp edge (dihedral angle above
 40 degrees, the hex stage's feature angle). BENCHMARKS.md "Features on the
 lattice".
