@@ -18,7 +18,13 @@
 //! point rescaled to the data scale, y = (x_t - Q_t q) / sqrt(ab_t), made local,
 //! u = (y - c) / h, whose noise is s = sqrt(1 - ab_t) / (sqrt(ab_t) h) cell units.
 //! Per point: c_in(s) u, sin / cos(pi 2^k u) for k < `octaves`, and the rank in
-//! [-1, 1]. Per cell: the label one-hot (an all-zero row is "label withheld", trained
+//! [-1, 1] with a flag saying whether it is given. The rank pins a training point's
+//! x to its quantile of the primitive's x-distribution; a real part's cell does not
+//! follow that distribution (its faces shared with neighbours carry no points, its
+//! sampling is not uniform by the primitive's area), and a denoiser that trusts the
+//! rank slides the points towards the quantiles it expects (measured: three times
+//! the displacement on a cell without its shared faces). So the sampler withholds it
+//! by default, and training withholds it for half of the cells. Per cell: the label one-hot (an all-zero row is "label withheld", trained
 //! by label dropout for guidance) and the noise features of ln(s) / 4, fused into a
 //! conditioning vector that modulates every residual block (FiLM, per cell).
 //! Output: EDM's preconditioned estimate x0(u) = c_skip(s) u + c_out(s) F, with
@@ -56,18 +62,25 @@ pub struct FieldConfig {
     /// Per-coordinate spread of a primitive's surface points in cell units (default
     /// 0.37: on a unit cube's surface E[x^2] = 1/3 * 1/4 + 2/3 * 1/12).
     pub sigma_data: f64,
+    /// The rank enters with a "rank known" flag, and training withholds it for a
+    /// share of the cells (`TrainConfig::rank_dropout`), so one network serves both
+    /// uses: with the rank, the estimate the sorted layout defines (the label probe's
+    /// reference); without it, a denoiser of the point alone, which the sampler uses
+    /// by default (`SamplerOptions::use_rank`). Weights without the flag (false) always
+    /// see the rank.
+    pub rank_flag: bool,
 }
 
 impl Default for FieldConfig {
     fn default() -> Self {
-        FieldConfig { width: 128, blocks: 4, cond_dim: 64, octaves: 3, sigma_data: 0.37 }
+        FieldConfig { width: 128, blocks: 4, cond_dim: 64, octaves: 3, sigma_data: 0.37, rank_flag: true }
     }
 }
 
 impl FieldConfig {
     /// Features per point.
     pub fn point_features(&self) -> usize {
-        3 + 6 * self.octaves + 1
+        3 + 6 * self.octaves + 1 + self.rank_flag as usize
     }
 }
 
@@ -97,6 +110,12 @@ pub struct FieldNet {
     octaves: usize,
     #[module(skip)]
     sigma_data: f64,
+    #[module(skip)]
+    rank_flag: bool,
+    /// Whether inference gives the network the slots' ranks (only meaningful with
+    /// `rank_flag`; without it the rank is always given).
+    #[module(skip)]
+    use_rank: bool,
 }
 
 impl FieldNet {
@@ -118,7 +137,26 @@ impl FieldNet {
             width: w,
             octaves: cfg.octaves,
             sigma_data: cfg.sigma_data,
+            rank_flag: cfg.rank_flag,
+            use_rank: !cfg.rank_flag,
         }
+    }
+
+    /// The same network giving (true) or withholding (false) the slots' ranks at
+    /// inference; a network trained without the flag always gets them.
+    pub fn with_rank(mut self, rank: bool) -> Self {
+        self.use_rank = rank || !self.rank_flag;
+        self
+    }
+
+    /// Whether inference gives the ranks.
+    pub fn uses_rank(&self) -> bool {
+        self.use_rank
+    }
+
+    /// A fresh batch for this network.
+    pub fn batch(&self) -> CellBatch {
+        CellBatch::new(self.octaves, self.sigma_data, self.rank_flag)
     }
 
     pub fn sigma_data(&self) -> f64 {
@@ -154,7 +192,7 @@ impl FieldNet {
         let b = t.len();
         assert_eq!(x.len(), b * TENSOR_LEN);
         assert_eq!(one_hot.len(), b * CONTEXT_DIM);
-        let mut batch = CellBatch::new(self.octaves, self.sigma_data);
+        let mut batch = self.batch();
         let mut where_: Vec<(usize, usize)> = Vec::new();
         for bi in 0..b {
             let oh = &one_hot[bi * CONTEXT_DIM..(bi + 1) * CONTEXT_DIM];
@@ -172,7 +210,7 @@ impl FieldNet {
                         std::array::from_fn(|ch| (((xb[flat(ch, r, col)] as f64 - shift[ch]) / sa - cf.centre[ch]) / cf.h) as f32)
                     })
                     .collect();
-                batch.push(&local, s, &oh[n * LABELS..(n + 1) * LABELS]);
+                batch.push(&local, s, &oh[n * LABELS..(n + 1) * LABELS], self.use_rank);
                 where_.push((bi, n));
             }
         }
@@ -247,6 +285,7 @@ pub fn noise_features(s: f64) -> [f32; NOISE_FEATURES] {
 pub struct CellBatch {
     octaves: usize,
     sigma_data: f64,
+    rank_flag: bool,
     pub feats: Vec<f32>,
     pub noise: Vec<f32>,
     pub labels: Vec<f32>,
@@ -257,8 +296,8 @@ pub struct CellBatch {
 }
 
 impl CellBatch {
-    pub fn new(octaves: usize, sigma_data: f64) -> Self {
-        CellBatch { octaves, sigma_data, ..Default::default() }
+    pub fn new(octaves: usize, sigma_data: f64, rank_flag: bool) -> Self {
+        CellBatch { octaves, sigma_data, rank_flag, ..Default::default() }
     }
 
     pub fn cells(&self) -> usize {
@@ -266,12 +305,13 @@ impl CellBatch {
     }
 
     fn point_features(&self) -> usize {
-        3 + 6 * self.octaves + 1
+        3 + 6 * self.octaves + 1 + self.rank_flag as usize
     }
 
-    /// Add one cell: its 512 local noisy points in slot order, its noise s and its
-    /// label row (11 values; all zero = withheld).
-    pub fn push(&mut self, local: &[[f32; 3]], s: f64, label_row: &[f32]) {
+    /// Add one cell: its 512 local noisy points in slot order, its noise s, its
+    /// label row (11 values; all zero = withheld) and whether the slots' ranks are
+    /// given (without the flag they always are).
+    pub fn push(&mut self, local: &[[f32; 3]], s: f64, label_row: &[f32], rank: bool) {
         assert_eq!(local.len(), POINTS_PER_CELL);
         assert_eq!(label_row.len(), LABELS);
         let (c_in, _, _) = precond(s, self.sigma_data);
@@ -287,7 +327,12 @@ impl CellBatch {
                     self.feats.push((f * v).cos());
                 }
             }
-            self.feats.push(2.0 * p as f32 / (np - 1) as f32 - 1.0);
+            if self.rank_flag {
+                self.feats.push(if rank { 2.0 * p as f32 / (np - 1) as f32 - 1.0 } else { 0.0 });
+                self.feats.push(rank as u8 as f32);
+            } else {
+                self.feats.push(2.0 * p as f32 / (np - 1) as f32 - 1.0);
+            }
             self.local.extend_from_slice(u);
         }
         self.noise.extend_from_slice(&noise_features(s));

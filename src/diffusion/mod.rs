@@ -100,12 +100,12 @@ impl Net {
         }
     }
 
-    /// The same network with the template attention's sampler options applied (a
-    /// no-op for networks without it).
-    pub fn configured(&self, kernel_gate: Option<f32>, visible_prior: bool) -> Net {
+    /// The same network with the sampler's options applied: the template
+    /// attention's gate and prior, and whether the point denoiser sees the ranks.
+    pub fn configured(&self, kernel_gate: Option<f32>, visible_prior: bool, use_rank: bool) -> Net {
         match self {
             Net::UNet(d) => Net::UNet(d.clone().with_kernel_gate(kernel_gate).with_visible_prior(visible_prior)),
-            Net::Field(f) => Net::Field(f.clone()),
+            Net::Field(f) => Net::Field(f.clone().with_rank(use_rank)),
             Net::Template(k) => Net::Template(k.clone().with_visible_prior(visible_prior)),
         }
     }

@@ -85,6 +85,10 @@ pub struct SamplerOptions {
     /// Goes with `VerifyOptions::visible_coverage` (the output then has no points on
     /// those faces). Measured in BENCHMARKS.md ("The visible prior").
     pub visible_prior: bool,
+    /// The point denoiser sees each slot's rank (`FieldConfig::rank_flag`). Default
+    /// false: the rank ties a slot to the quantile the standalone primitive's area
+    /// gives it, which a real part's cell does not follow. Ignored by other networks.
+    pub use_rank: bool,
 }
 
 impl Default for SamplerOptions {
@@ -104,6 +108,7 @@ impl Default for SamplerOptions {
             guidance: 0.0,
             kernel_gate: DEFAULT_KERNEL_GATE,
             visible_prior: DEFAULT_VISIBLE_PRIOR,
+            use_rank: false,
         }
     }
 }
@@ -216,13 +221,8 @@ pub fn reverse_diffusion(
         }
     }
     let n = inputs.len();
-    let configured;
-    let net = if opts.kernel_gate.is_some() || opts.visible_prior {
-        configured = model.net.configured(opts.kernel_gate.map(|g| g as f32), opts.visible_prior);
-        &configured
-    } else {
-        &model.net
-    };
+    let configured = model.net.configured(opts.kernel_gate.map(|g| g as f32), opts.visible_prior, opts.use_rank);
+    let net = &configured;
     let mut out = SampleOutput { tensors: vec![Vec::new(); n], trajectory: vec![Vec::new(); n] };
     let sched = &model.schedule;
     // each candidate's start step: fixed, or from its cells' noise level in cell units
@@ -351,8 +351,8 @@ pub fn reverse_diffusion(
                     *v = (sa * *v as f64 + shift * sched.config.q[ch]) as f32;
                 }
                 let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &model.device);
-                let eps: Vec<f32> = model
-                    .forward(xt_t, &vec![t; b], ctx_t.clone())
+                let eps: Vec<f32> = net
+                    .forward(xt_t, &vec![t; b], ctx_t.clone(), sched)
                     .into_data()
                     .try_into_vec::<f32>()
                     .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;

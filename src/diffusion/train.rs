@@ -76,6 +76,10 @@ pub struct TrainConfig {
     /// one network learns the conditional and the "labels unknown" predictions
     /// (`SamplerOptions::guidance` combines them). 0 = off.
     pub label_dropout: f64,
+    /// Point denoiser only: the share of training cells whose slots' ranks are
+    /// withheld (`FieldConfig::rank_flag`). 0 = always given.
+    #[serde(default)]
+    pub rank_dropout: f64,
     pub dataset: DatasetConfig,
     pub model: ModelConfig,
     pub schedule: ScheduleConfig,
@@ -85,8 +89,9 @@ impl TrainConfig {
     /// The default model's training run: the point denoiser ([`super::field`]) with
     /// 64 cells a step, Adam at 1e-3 after a 200-step warm-up, decaying linearly to
     /// 5 %, 5 % of the points with triple noise (points far from the surface at low
-    /// noise, where the reverse process on a real part puts them) and 10 % label
-    /// dropout (the "label withheld" estimate for guidance). Seed 42.
+    /// noise, where the reverse process on a real part puts them), 10 % label
+    /// dropout (the "label withheld" estimate for guidance) and the ranks withheld
+    /// for half of the cells (the sampler's default denoises without them). Seed 42.
     pub fn field_default() -> Self {
         TrainConfig {
             epochs: 12,
@@ -98,6 +103,7 @@ impl TrainConfig {
             outlier_prob: 0.05,
             outlier_scale: 3.0,
             label_dropout: 0.1,
+            rank_dropout: 0.5,
             model: ModelConfig { field: Some(Default::default()), ..Default::default() },
             ..Default::default()
         }
@@ -122,6 +128,7 @@ impl Default for TrainConfig {
             outlier_prob: 0.0,
             outlier_scale: 1.0,
             label_dropout: 0.0,
+            rank_dropout: 0.0,
             dataset: DatasetConfig::default(),
             model: ModelConfig::default(),
             schedule: ScheduleConfig::default(),
@@ -451,6 +458,7 @@ pub(super) fn meta_for(cfg: &TrainConfig, epochs: usize, steps: usize, loss: f64
             outlier_prob: cfg.outlier_prob,
             outlier_scale: cfg.outlier_scale,
             label_dropout: cfg.label_dropout,
+            rank_dropout: cfg.rank_dropout,
         },
         dtype: "f32".into(),
     }

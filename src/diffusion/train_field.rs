@@ -91,7 +91,7 @@ pub fn train_field(requested: &TrainConfig, out: &Path, resume: Option<&Path>, o
             cfg = TrainConfig { epochs: requested.epochs, ..state.config.clone() };
             let fc = cfg.model.field.clone().ok_or_else(|| Error::Model(format!("{}: not a point-denoiser checkpoint", st.display())))?;
             let rec = std::fs::read(&netf).map_err(io(&netf))?;
-            net = load_module(fresh_field(&fc, &ad, None), &rec, false)?;
+            net = load_module(fresh_field(&fc, &ad, None), &rec, false)?.with_rank(true);
             opt = adam().load(&optf).map_err(|e| Error::Model(format!("{}: {e:?}", optf.display())))?;
             epoch0 = state.epochs_done;
             step = state.steps_done;
@@ -102,7 +102,7 @@ pub fn train_field(requested: &TrainConfig, out: &Path, resume: Option<&Path>, o
         None => {
             cfg = requested.clone();
             let fc = cfg.model.field.clone().ok_or_else(|| Error::InvalidArgument("train_field needs a point-denoiser configuration".into()))?;
-            net = fresh_field(&fc, &ad, Some(cfg.seed));
+            net = fresh_field(&fc, &ad, Some(cfg.seed)).with_rank(true);
             opt = adam();
             epoch0 = 0;
             step = 0;
@@ -196,8 +196,8 @@ pub fn train_field(requested: &TrainConfig, out: &Path, resume: Option<&Path>, o
 
 /// The network inputs and targets of a batch of cells: per cell a timestep drawn
 /// log-uniform in noise level, Gaussian noise (a point's noise scaled by
-/// `outlier_scale` with probability `outlier_prob`), and the label withheld with
-/// probability `label_dropout`.
+/// `outlier_scale` with probability `outlier_prob`), the label withheld with
+/// probability `label_dropout` and the ranks with probability `rank_dropout`.
 fn noisy_batch<'a>(
     cells: impl Iterator<Item = &'a TrainCell>,
     fc: &FieldConfig,
@@ -205,7 +205,7 @@ fn noisy_batch<'a>(
     cfg: &TrainConfig,
     rng: &mut rand_chacha::ChaCha8Rng,
 ) -> (CellBatch, Vec<f32>) {
-    let mut batch = CellBatch::new(fc.octaves, fc.sigma_data);
+    let mut batch = CellBatch::new(fc.octaves, fc.sigma_data, fc.rank_flag);
     let mut target = Vec::new();
     let mut u = vec![[0f32; 3]; POINTS_PER_CELL];
     for cell in cells {
@@ -222,7 +222,8 @@ fn noisy_batch<'a>(
         if !(cfg.label_dropout > 0.0 && rng.random_range(0.0..1.0) < cfg.label_dropout) {
             row[cell.label.label() as usize] = 1.0;
         }
-        batch.push(&u, s, &row);
+        let rank = !(cfg.rank_dropout > 0.0 && rng.random_range(0.0..1.0) < cfg.rank_dropout);
+        batch.push(&u, s, &row, rank);
         let (_, c_skip, c_out) = precond(s, fc.sigma_data);
         for (x0, ui) in cell.local.iter().zip(&u) {
             for a in 0..3 {

@@ -46,6 +46,9 @@ pub struct TrainingInfo {
     /// Label dropout (classifier-free guidance training); 0 = off.
     #[serde(default)]
     pub label_dropout: f64,
+    /// Rank dropout (point denoiser); 0 = off.
+    #[serde(default)]
+    pub rank_dropout: f64,
 }
 
 fn one() -> f64 {

@@ -339,24 +339,30 @@ pub struct ProbeRow {
 }
 
 /// Bayes-optimal noise of one cell's slots given `draws` independent sorted samples
-/// of its primitive (the p-th point of each draw is a draw from p(x_0 | rank p)).
-fn bayes_eps(draws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: [f64; 3]) -> Vec<f64> {
+/// of its primitive: with `rank`, the p-th point of each draw is a draw from
+/// p(x_0 | rank p), the estimate the sorted layout defines; without, every point of
+/// every draw is a draw from the primitive, the estimate of a point alone.
+fn bayes_eps(draws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: [f64; 3], rank: bool) -> Vec<f64> {
     use crate::polycube::tensor::{flat, slot, POINTS_PER_CELL};
+    let pts: Vec<Vec<[f64; 3]>> = (0..POINTS_PER_CELL)
+        .map(|p| {
+            let (r, c) = slot(n, p);
+            draws.iter().map(|d| std::array::from_fn(|ch| d[flat(ch, r, c)] as f64)).collect()
+        })
+        .collect();
+    // 64 draws pooled: 32,768 points, about 0.014 cell units apart on a cell's surface
+    let pooled: Vec<[f64; 3]> = if rank { Vec::new() } else { pts.iter().flat_map(|v| v.iter().take(64)).copied().collect() };
     let mut out = Vec::with_capacity(POINTS_PER_CELL * 3);
-    let mut w = vec![0f64; draws.len()];
     for p in 0..POINTS_PER_CELL {
         let (r, c) = slot(n, p);
         let y: [f64; 3] = std::array::from_fn(|ch| xt[flat(ch, r, c)] as f64 - shift[ch]);
-        for (k, d) in draws.iter().enumerate() {
-            w[k] = -(0..3).map(|ch| (y[ch] - sa * d[flat(ch, r, c)] as f64).powi(2)).sum::<f64>() / (2.0 * sd * sd);
-        }
+        let cand: &[[f64; 3]] = if rank { &pts[p] } else { &pooled };
+        let w: Vec<f64> = cand.iter().map(|d| -(0..3).map(|ch| (y[ch] - sa * d[ch]).powi(2)).sum::<f64>() / (2.0 * sd * sd)).collect();
         let m = w.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        let tot: f64 = w.iter_mut().map(|v| {
-            *v = (*v - m).exp();
-            *v
-        }).sum();
+        let w: Vec<f64> = w.iter().map(|v| (v - m).exp()).collect();
+        let tot: f64 = w.iter().sum();
         for ch in 0..3 {
-            let mx: f64 = draws.iter().zip(&w).map(|(d, wi)| wi * d[flat(ch, r, c)] as f64).sum::<f64>() / tot;
+            let mx: f64 = cand.iter().zip(&w).map(|(d, wi)| wi * d[ch]).sum::<f64>() / tot;
             out.push((y[ch] - sa * mx) / sd);
         }
     }
@@ -367,8 +373,11 @@ fn bayes_eps(draws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: 
 /// is sampled (seeded), forward-noised at t, and the model predicts the noise under
 /// A and under B (same cell, another label); the Bayes-optimal predictors of A and B
 /// (300 sorted samplings each) give the difference the label should make. Averaged
-/// over `trials` fresh cells and noises per t (sums of squares pooled).
-pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: u64, trials: usize) -> Result<Vec<ProbeRow>> {
+/// over `trials` fresh cells and noises per t (sums of squares pooled). With `rank`
+/// the model sees the slots' ranks and the reference is the rank-conditioned
+/// estimate; without, neither uses them (the point denoiser's default; a U-Net or
+/// the template estimate always use the layout, so probe them with `rank`).
+pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: u64, trials: usize, rank: bool) -> Result<Vec<ProbeRow>> {
     use crate::polycube::tensor::{flat, layout, slot, POINTS_PER_CELL, TENSOR_H, TENSOR_LEN, TENSOR_W};
     use burn::tensor::{Tensor, TensorData};
     use rand_distr::{Distribution, StandardNormal};
@@ -381,6 +390,7 @@ pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: 
     };
     let (da, db) = (draws(a, seed ^ 0xa), draws(b, seed ^ 0xb));
     let sched = &model.schedule;
+    let net = model.net.configured(Some(1.0), false, rank);
     let idx: Vec<usize> = (0..POINTS_PER_CELL).flat_map(|p| {
         let (r, c) = slot(n, p);
         (0..3).map(move |ch| flat(ch, r, c))
@@ -388,7 +398,7 @@ pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: 
     let predict = |xt: &[f32], t: usize, c: &Context| -> Vec<f32> {
         let ct = Tensor::<2>::from_data(TensorData::new(c.one_hot().to_vec(), [1, crate::polycube::CONTEXT_DIM]), &model.device);
         let x = Tensor::<4>::from_data(TensorData::new(xt.to_vec(), [1, 3, TENSOR_H, TENSOR_W]), &model.device);
-        model.forward(x, &[t], ct).into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
+        net.forward(x, &[t], ct, sched).into_data().convert::<f32>().try_into_vec::<f32>().unwrap_or_default()
     };
     let mut rows = Vec::new();
     for &t in ts {
@@ -403,7 +413,7 @@ pub fn label_probe(model: &Model, a: &Context, b: &Context, ts: &[usize], seed: 
             let (ea, eb_) = (predict(&xt, t, a), predict(&xt, t, b));
             let (sa, sd) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt());
             let shift = sched.config.q.map(|q| sched.qcoef[t] * q);
-            let (ba, bb) = (bayes_eps(&da, &xt, n, sa, sd, shift), bayes_eps(&db, &xt, n, sa, sd, shift));
+            let (ba, bb) = (bayes_eps(&da, &xt, n, sa, sd, shift, rank), bayes_eps(&db, &xt, n, sa, sd, shift, rank));
             for (i, &k) in idx.iter().enumerate() {
                 let m = (ea[k] - eb_[k]) as f64;
                 let y = ba[i] - bb[i];
