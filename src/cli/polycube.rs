@@ -4,6 +4,7 @@ use super::common::{load_checked, to_user_polycube, write_json, Loaded};
 use sddpm::search::auto::{AutoOptions, SplitRatios};
 use sddpm::search::generate::PolycubeOptions;
 use sddpm::context::{Constraints, Context};
+use sddpm::diffusion::sample::SamplerOptions;
 use sddpm::diffusion::{Backend, Model};
 use sddpm::error::Error;
 use sddpm::pipeline::{generate_polycube, ContextRequest};
@@ -64,7 +65,15 @@ pub struct PolycubeArgs {
     /// visible prior (PolycubeOptions::visible_retry, on by default).
     #[arg(long)]
     pub no_visible_retry: bool,
-    /// Model weights (default: the embedded model).
+    /// The generator: "learned" (the embedded point denoiser, or --weights) or
+    /// "template" (the closed-form template estimate, the baseline; no weights).
+    #[arg(long, default_value = "learned")]
+    pub generator: String,
+    /// The sampler: "strided" (the generator's default) or "paper" (the paper's
+    /// reverse process from the input itself at T, all T ancestral steps).
+    #[arg(long)]
+    pub sampler: Option<String>,
+    /// Model weights for the learned generator (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Print the report as one JSON object on stdout.
@@ -96,8 +105,17 @@ pub fn kernel_gate_arg(g: f64) -> Option<f64> {
     if g < 0.0 { None } else { Some(g) }
 }
 
-pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
-    let mut o = PolycubeOptions { seed: a.seed, ..Default::default() };
+pub fn options_of(a: &PolycubeArgs) -> Result<PolycubeOptions> {
+    let mut o = match a.generator.as_str() {
+        "template" => PolycubeOptions::template(),
+        _ => PolycubeOptions::default(),
+    };
+    match a.sampler.as_deref() {
+        None | Some("strided") => {}
+        Some("paper") => o.sampler = SamplerOptions { kernel_gate: o.sampler.kernel_gate, ..SamplerOptions::paper() },
+        Some(other) => return Err(Error::InvalidArgument(format!("--sampler must be strided or paper, got {other:?}"))),
+    }
+    o.seed = a.seed;
     o.sampler.seed = a.seed;
     if let Some(s) = a.steps {
         o.sampler.steps = s;
@@ -121,7 +139,7 @@ pub fn options_of(a: &PolycubeArgs) -> PolycubeOptions {
     if a.no_visible_retry {
         o.visible_retry = false;
     }
-    o
+    Ok(o)
 }
 
 pub fn load_model(weights: &Option<PathBuf>) -> Result<Model> {
@@ -131,16 +149,27 @@ pub fn load_model(weights: &Option<PathBuf>) -> Result<Model> {
     }
 }
 
+/// The model `--generator` and `--weights` name.
+pub fn load_generator(a: &PolycubeArgs) -> Result<Model> {
+    match a.generator.as_str() {
+        "learned" => load_model(&a.weights),
+        "template" if a.weights.is_none() => Ok(Model::template()),
+        "template" => Err(Error::InvalidArgument("--weights is an option of --generator learned".into())),
+        other => Err(Error::InvalidArgument(format!("--generator must be learned or template, got {other:?}"))),
+    }
+}
+
 pub fn run(a: &PolycubeArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh, a.weld_tolerance)?;
     let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(a)?;
-    let model = load_model(&a.weights)?;
+    let model = load_generator(a)?;
+    let opts = options_of(a)?;
     std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
     let quiet = a.quiet;
     let mut progress = super::common::progress_bar(quiet);
-    let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &options_of(a), &AutoOptions::default(), &mut progress)?;
+    let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &opts, &AutoOptions::default(), &mut progress)?;
     let chosen = result.chosen.map(|i| &result.candidates[i]);
     if let Some(c) = chosen {
         let obj = to_user_polycube(&result, c);

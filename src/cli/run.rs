@@ -1,7 +1,7 @@
 //! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline] [fallback options] [quality goals]`: the main job.
 
 use super::common::{load_checked, Loaded};
-use super::polycube::{load_model, options_of, request_of, PolycubeArgs};
+use super::polycube::{load_generator, options_of, request_of, PolycubeArgs};
 use sddpm::error::Error;
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, RunOptions};
@@ -136,9 +136,9 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
-    let model = load_model(&p.weights)?;
+    let model = load_generator(p)?;
     std::fs::create_dir_all(&p.output).map_err(|e| Error::io(p.output.display(), e))?;
-    opts.polycube = options_of(p);
+    opts.polycube = options_of(p)?;
     if a.no_spline {
         opts.spline = None;
     }

@@ -92,15 +92,18 @@ pub struct SamplerOptions {
 }
 
 impl Default for SamplerOptions {
+    /// The learned generator's sampler: the strided deterministic sampler over
+    /// [`LEARNED_STEPS`] steps from the input noised to [`LEARNED_START_NOISE`] cell
+    /// units, ranks withheld.
     fn default() -> Self {
         SamplerOptions {
-            steps: DEFAULT_STEPS,
+            steps: LEARNED_STEPS,
             seed: 0,
             keep_every: 0,
             max_batch: 16,
-            start_step: DEFAULT_START_STEP,
-            start_noise: None,
-            raw_start: false,
+            start_step: 0,
+            start_noise: Some(LEARNED_START_NOISE),
+            raw_start: LEARNED_RAW_START,
             refine_passes: DEFAULT_REFINE_PASSES,
             refine_t: DEFAULT_REFINE_T,
             clip_margin: DEFAULT_CLIP_MARGIN,
@@ -113,8 +116,32 @@ impl Default for SamplerOptions {
     }
 }
 
-/// Default number of sampler steps, chosen by the measurement in BENCHMARKS.md.
-pub const DEFAULT_STEPS: usize = 50;
+impl SamplerOptions {
+    /// The baseline generator's sampler (the closed-form template estimate): 50
+    /// strided steps from the input forward-noised at t = 200 (BENCHMARKS.md, the
+    /// template estimate's measurements).
+    pub fn template() -> Self {
+        SamplerOptions { steps: TEMPLATE_STEPS, start_step: TEMPLATE_START_STEP, start_noise: None, raw_start: false, ..Default::default() }
+    }
+
+    /// The paper's sampler as written: the reverse process from the input geometry
+    /// itself as x'_T (no forward noising), all T ancestral steps with the
+    /// nonzero-mean drift and sigma_t^2 = b_t.
+    pub fn paper() -> Self {
+        SamplerOptions { steps: 0, start_step: 0, start_noise: None, raw_start: true, ..Default::default() }
+    }
+}
+
+/// Steps of the learned generator's strided sampler (BENCHMARKS.md, "Generator").
+pub const LEARNED_STEPS: usize = 20;
+/// Noise level, in cell units, the learned generator starts from (BENCHMARKS.md,
+/// "Generator": the sweep of start levels on the tuning seed).
+pub const LEARNED_START_NOISE: f64 = 0.03;
+/// Whether the learned generator starts from the input itself at that level (true)
+/// or from the input forward-noised to it (false).
+pub const LEARNED_RAW_START: bool = false;
+/// Steps of the template estimate's sampler, chosen by measurement (docs/history/diffusion.md).
+pub const TEMPLATE_STEPS: usize = 50;
 /// Default gate of the template attention: its estimate alone. Measured in
 /// BENCHMARKS.md ("Template attention"): the gate learned on the MSE loss stays near
 /// the small least-squares blend and does not make the label's shape (TCV 1/16 on
@@ -122,12 +149,12 @@ pub const DEFAULT_STEPS: usize = 50;
 /// U-Net alone); on the real meshes of the main job the estimate alone verifies
 /// where the U-Net verified none.
 pub const DEFAULT_KERNEL_GATE: Option<f64> = Some(1.0);
-/// Default start step (0 = T), chosen by the measurement in BENCHMARKS.md (with the
-/// visible prior, 100 measured better: "The visible prior").
-pub const DEFAULT_START_STEP: usize = 200;
+/// Start step of the template estimate's sampler (0 = T), chosen by measurement
+/// (docs/history/diffusion.md; with the visible prior, 100 measured better).
+pub const TEMPLATE_START_STEP: usize = 200;
 /// Default of `SamplerOptions::visible_prior`: off. It lets more true contexts pass
 /// TCV in the user-guided mode but makes the automated mode's ranking pick wrong
-/// verified candidates (BENCHMARKS.md, "The visible prior").
+/// verified candidates (docs/history/diffusion.md, "The visible prior").
 pub const DEFAULT_VISIBLE_PRIOR: bool = false;
 /// Default refinement passes and their timestep (BENCHMARKS.md).
 pub const DEFAULT_REFINE_PASSES: usize = 0;

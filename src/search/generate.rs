@@ -78,12 +78,14 @@ pub struct PolycubeOptions {
     /// visible prior (`SamplerOptions::visible_prior`, the template attention without
     /// the faces a cell shares with an occupied neighbour, from step
     /// [`VISIBLE_RETRY_START_STEP`]) and verified with `VerifyOptions::visible_coverage`;
-    /// passing there verifies it (`Candidate::visible_retry`). Default true: with the
-    /// mean-cell-fit score it lifts the automated recovery on held-in assemblies
-    /// (BENCHMARKS.md, "Ranking verified candidates by the mean cell fit": seed 5000,
-    /// 24 cases per group, 22 / 18 / 10 -> 23 / 21 / 16 of 24 for simple / medium /
-    /// complex) for about a quarter more time in the medium and complex groups. No
-    /// effect when the sampler already uses the visible prior.
+    /// passing there verifies it (`Candidate::visible_retry`). Only the template
+    /// estimate has a prior: default false, true in [`PolycubeOptions::template`],
+    /// where with the mean-cell-fit score it lifts the automated recovery on
+    /// held-in assemblies (docs/history/context-search.md, "Ranking verified
+    /// candidates by the mean cell fit": seed 5000, 24 cases per group, 22 / 18 / 10
+    /// -> 23 / 21 / 16 of 24 for simple / medium / complex) for about a quarter more
+    /// time in the medium and complex groups. No effect when the sampler already
+    /// uses the visible prior.
     pub visible_retry: bool,
     /// Surface samples drawn from the input (shared by every candidate).
     pub oversampling: usize,
@@ -104,9 +106,32 @@ impl Default for PolycubeOptions {
             relative_fit: 2.0,
             relative_fit_cap: 0.5,
             neighbour_fit_ratio: 1.5,
-            visible_retry: true,
+            visible_retry: false,
             oversampling: DEFAULT_OVERSAMPLING,
             seed: 0,
+        }
+    }
+}
+
+impl PolycubeOptions {
+    /// The options that go with the baseline generator, the closed-form template
+    /// estimate ([`crate::diffusion::Model::template`]): its sampler
+    /// ([`SamplerOptions::template`]), TCV's coverage over the whole template (its
+    /// output carries the faces shared with neighbours), and the second diffusion
+    /// with the visible prior for a candidate that fails.
+    pub fn template() -> Self {
+        let mut o = PolycubeOptions { sampler: SamplerOptions::template(), visible_retry: true, ..Default::default() };
+        o.verify.visible_coverage = false;
+        o
+    }
+
+    /// The default options for a model: [`PolycubeOptions::template`] for a
+    /// generator that samples with the template estimate, else the defaults.
+    pub fn for_model(model: &Model) -> Self {
+        if model.net.is_template(SamplerOptions::template().kernel_gate) && model.net.field().is_none() {
+            Self::template()
+        } else {
+            Self::default()
         }
     }
 }

@@ -54,11 +54,11 @@ pub struct VerifyOptions {
     /// Leave a template's faces that the context shares with an occupied neighbour
     /// out of the coverage half of the PCD (template to output); see [`cell_pcd`].
     /// They lie inside the assembled solid, so the input has no surface there, and
-    /// with the sampler's visible prior (`SamplerOptions::visible_prior`) neither has
-    /// the output; the two go together. Off by default (the paper's PCD over the
-    /// whole template), with the whole-primitive prior whose output carries those
-    /// faces. Measured in BENCHMARKS.md ("TCV: coverage of the shared faces", "The
-    /// visible prior").
+    /// neither has the output of a generator that follows the input (the learned
+    /// point denoiser, or the template estimate with its visible prior). On by
+    /// default; the template estimate's options turn it off (its output carries
+    /// those faces: `PolycubeOptions::template`). Measured in BENCHMARKS.md
+    /// ("Generator") and docs/history/diffusion.md ("The visible prior").
     pub visible_coverage: bool,
 }
 
@@ -74,7 +74,7 @@ impl Default for VerifyOptions {
             tau_cd: 0.015,
             penalty_p: 2.0,
             template_points: 2048,
-            visible_coverage: false,
+            visible_coverage: true,
         }
     }
 }
