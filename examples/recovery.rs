@@ -17,7 +17,8 @@
 //! Prints one line per case, a Markdown table per group and writes a CSV.
 //!
 //! `cargo run --release --example recovery -- [CASES_PER_GROUP] [SEED] [CSV] [GROUPS]`
-//! (environment: RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=0/1
+//! (environment: RECOVERY_GENERATOR=template runs the baseline generator,
+//! RECOVERY_WEIGHTS=FILE other learned weights, RECOVERY_TAU_CD overrides TCV's tau_CD, RECOVERY_VISIBLE_COVERAGE=0/1
 //! sets VerifyOptions::visible_coverage, RECOVERY_VISIBLE_PRIOR=0/1
 //! SamplerOptions::visible_prior, RECOVERY_START_STEP=t SamplerOptions::start_step,
 //! RECOVERY_VISIBLE_RETRY=0/1 PolycubeOptions::visible_retry (default on), RECOVERY_JOINT=1 turns on
@@ -172,8 +173,13 @@ fn main() -> sddpm::Result<()> {
     assert_ne!(seed, 42, "42 is the training seed");
     // RECOVERY_USER_ONLY=1: only the user-guided runs (seconds per case)
     let user_only = std::env::var_os("RECOVERY_USER_ONLY").is_some();
-    let model = Model::default_model()?;
-    let mut popts = PolycubeOptions::default();
+    // RECOVERY_GENERATOR=template: the closed-form template estimate with its options;
+    // RECOVERY_WEIGHTS=FILE: learned weights other than the embedded ones
+    let (model, mut popts) = match (std::env::var("RECOVERY_GENERATOR").as_deref(), std::env::var("RECOVERY_WEIGHTS")) {
+        (Ok("template"), _) => (Model::template(), PolycubeOptions::template()),
+        (_, Ok(w)) => (Model::from_file(std::path::Path::new(&w), sddpm::diffusion::Backend::Flex)?, PolycubeOptions::default()),
+        _ => (Model::default_model()?, PolycubeOptions::default()),
+    };
     // RECOVERY_TAU_CD=x: TCV's threshold (VerifyOptions::tau_cd) for this run
     if let Some(t) = std::env::var("RECOVERY_TAU_CD").ok().and_then(|s| s.parse().ok()) {
         popts.verify.tau_cd = t;
