@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Feature sheets (HexOptions::feature_sheets) on / off, one lattice each: HexGen's
+# Feature sheets (QualityOptions::feature_sheets) on / off, one lattice each: HexGen's
 # four with the coverage step (HEX_PIN=0.6) as in BENCHMARKS.md "At HexGen's
 # element counts", the other parts with the library's defaults:
 #   bash benches/feature_sheets.sh > sheets.txt

@@ -52,7 +52,7 @@ fn run() {
     while i < args.len() {
         match args[i].as_str() {
             "--level" => {
-                opts.level = Some(args[i + 1].parse().unwrap());
+                opts.map.level = Some(args[i + 1].parse().unwrap());
                 i += 1;
             }
             "--out" => {
@@ -65,22 +65,22 @@ fn run() {
                 levels = Some(args[i + 1].clone());
                 i += 1;
             }
-            "--raw" => opts.keep_better_mapped = false,
-            "--no-pillow" => opts.pillow = false,
+            "--raw" => opts.quality.keep_better_mapped = false,
+            "--no-pillow" => opts.quality.pillow = false,
             "--fit-rounds" => {
-                opts.surface_relax_iterations = args[i + 1].parse().unwrap();
+                opts.surface.relax_iterations = args[i + 1].parse().unwrap();
                 i += 1;
             }
             "--no-quality" => {
-                opts.smooth_iterations = 0;
-                opts.optimise_passes = 0;
+                opts.quality.smooth_iterations = 0;
+                opts.quality.optimise_passes = 0;
             }
             a => filters.push(a.to_string()),
         }
         i += 1;
     }
     if let Ok(a) = std::env::var("HEX_FEATURE_ANGLE") {
-        opts.feature_angle = a.parse().unwrap();
+        opts.surface.feature_angle = a.parse().unwrap();
     }
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     for (file, labels, _why) in MODELS {
@@ -136,11 +136,12 @@ fn run() {
             let (a, b) = spec.split_once('-').map(|(a, b)| (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())).unwrap_or((1, 4));
             for l in a..=b {
                 let (input, _) = HexInput::from_alignment(&al, ctx).expect("input");
-                let o = HexOptions { level: Some(l), ..opts.clone() };
+                let mut o = opts.clone();
+                o.map.level = Some(l);
                 let t0 = Instant::now();
                 let r = build_hex_mesh(&input, &o, &mut sddpm::error::NoProgress).expect("hex");
                 let total = t0.elapsed().as_secs_f64();
-                let st = |name: &str| r.stages.iter().find(|s| s.stage == name).map(|s| s.seconds).unwrap_or(0.0);
+                let st = |name: &str| r.stages.iter().find(|s| s.stage.name() == name).map(|s| s.seconds).unwrap_or(0.0);
                 // capture = the sharp-edge capture, coverage and recapture steps
                 table.push(format!(
                     "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {:.3} | {:.3} | {} | {:.2} % |",
@@ -174,7 +175,7 @@ fn run() {
             }
         };
         let secs = t0.elapsed().as_secs_f64();
-        let st = |name: &str| r.stages.iter().find(|s| s.stage == name).map(|s| s.seconds).unwrap_or(0.0);
+        let st = |name: &str| r.stages.iter().find(|s| s.stage.name() == name).map(|s| s.seconds).unwrap_or(0.0);
         table.push(format!(
             "| {} | {} | {} / {} | {} | {} / {} | {:.3} | {:.3} | {} | {:.2} % | {:.2} % | {:.2} / {:.2} / {:.2} / {:.2} | {:.1} |",
             file.split('.').next().unwrap(),
@@ -215,7 +216,7 @@ fn run() {
                 s.stage, s.before.min, s.after.min, s.before.mean, s.after.mean, s.before.inverted, s.after.inverted, s.seconds
             );
             if std::env::var("HEX_DETAILS").is_ok() {
-                println!("        {}", s.details);
+                println!("        {}", s.details_json());
             }
         }
         for l in &r.levels {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Narrow patches merged (HexOptions::narrow_patch_width) and the feature curves'
+# Narrow patches merged (QualityOptions::narrow_patch_width) and the feature curves'
 # median angle (HexOptions::feature_median_angle), one lattice each with the
 # coverage step (HEX_PIN=0.6), as in BENCHMARKS.md "Narrow patches merged":
 #   bash benches/narrow_patches.sh > narrow.txt

@@ -17,39 +17,39 @@ fn main() -> sddpm::Result<()> {
     if a[2].starts_with("voxel") {
         let mut opts = sddpm::hex::HexOptions::default();
         if let Ok(n) = a[2]["voxel".len()..].parse() {
-            opts.voxel_resolution = n; // e.g. voxel48
+            opts.fallback.resolution = n; // e.g. voxel48
         }
         if let Some(r) = a.get(3).and_then(|s| s.parse().ok()) {
-            opts.voxel_refinements = r; // e.g. voxel48 0: that lattice only
+            opts.fallback.refinements = r; // e.g. voxel48 0: that lattice only
         }
-        // HEX_PIN=F: the coverage step at F times the Hausdorff goal (HexOptions::pin_uncovered)
-        opts.pin_uncovered = std::env::var("HEX_PIN").ok().and_then(|s| s.parse().ok()).unwrap_or(0.0);
-        // HEX_CAPTURE=0: without the sharp-edge capture steps (HexOptions::capture_features, on by default)
+        // HEX_PIN=F: the coverage step at F times the Hausdorff goal (QualityOptions::pin_uncovered)
+        opts.quality.pin_uncovered = std::env::var("HEX_PIN").ok().and_then(|s| s.parse().ok()).unwrap_or(0.0);
+        // HEX_CAPTURE=0: without the sharp-edge capture steps (QualityOptions::capture_features, on by default)
         if let Ok(v) = std::env::var("HEX_CAPTURE") {
-            opts.capture_features = v != "0";
+            opts.quality.capture_features = v != "0";
         }
-        // HEX_SHEETS=0: without the feature sheets (HexOptions::feature_sheets, on by default)
+        // HEX_SHEETS=0: without the feature sheets (QualityOptions::feature_sheets, on by default)
         if let Ok(v) = std::env::var("HEX_SHEETS") {
-            opts.feature_sheets = v != "0";
+            opts.quality.feature_sheets = v != "0";
         }
-        // HEX_NARROW=DEG: narrow corner faces below DEG degrees (HexOptions::narrow_corner_faces, 70 by default; 0 off)
+        // HEX_NARROW=DEG: narrow corner faces below DEG degrees (QualityOptions::narrow_corner_faces, 70 by default; 0 off)
         if let Some(d) = std::env::var("HEX_NARROW").ok().and_then(|s| s.parse().ok()) {
-            opts.narrow_corner_faces = d;
+            opts.quality.narrow_corner_faces = d;
         }
-        // HEX_MEDIAN=DEG: the feature curves' median dihedral angle (HexOptions::feature_median_angle, 60 by default)
+        // HEX_MEDIAN=DEG: the feature curves' median dihedral angle (SurfaceOptions::feature_median_angle, 60 by default)
         if let Some(d) = std::env::var("HEX_MEDIAN").ok().and_then(|s| s.parse().ok()) {
-            opts.feature_median_angle = d;
+            opts.surface.feature_median_angle = d;
         }
-        // HEX_NARROW_PATCH=F: patches narrower than F lattice spacings merged (HexOptions::narrow_patch_width, 0.75 by default; 0 off)
+        // HEX_NARROW_PATCH=F: patches narrower than F lattice spacings merged (QualityOptions::narrow_patch_width, 0.75 by default; 0 off)
         if let Some(d) = std::env::var("HEX_NARROW_PATCH").ok().and_then(|s| s.parse().ok()) {
-            opts.narrow_patch_width = d;
+            opts.quality.narrow_patch_width = d;
         }
-        // HEX_ALIGN=F: lattice planes on the axis-parallel faces of at least F of the area (HexOptions::lattice_planes)
+        // HEX_ALIGN=F: lattice planes on the axis-parallel faces of at least F of the area (FallbackOptions::lattice_planes)
         if let Some(d) = std::env::var("HEX_ALIGN").ok().and_then(|s| s.parse().ok()) {
-            opts.lattice_planes = d;
+            opts.fallback.lattice_planes = d;
         }
-        // HEX_REFINE=N: N local refinement rounds (HexOptions::local_refinement)
-        opts.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
+        // HEX_REFINE=N: N local refinement rounds (FallbackOptions::local_refinement)
+        opts.fallback.local_refinement = std::env::var("HEX_REFINE").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
         // HEX_HAUSDORFF=G: the surface-fit goal the lattice loop aims at (QualityGoals::hausdorff)
         if let Some(g) = std::env::var("HEX_HAUSDORFF").ok().and_then(|s| s.parse().ok()) {
             opts.goals.hausdorff = g;
@@ -71,19 +71,17 @@ fn main() -> sddpm::Result<()> {
         let hd = &r.hausdorff;
         let diag = hd.distance / hd.relative.max(1e-300);
         println!("   hausdorff: hex->surface {:.4} surface->hex {:.4} mean {:.5} (relative)", hd.hex_to_surface / diag, hd.surface_to_hex / diag, hd.mean_relative);
-        if let Some(l) = r.stages.first().map(|s| &s.details["lattices_meshed"]) {
-            println!("   lattices meshed: {l}");
-        }
-        if let Some(f) = r.stages.first().map(|s| &s.details["feature_sheets"]).filter(|f| !f.is_null()) {
-            println!("   feature sheets: {f}");
-        }
-        if let Some(t) = r.stages.first().and_then(|s| s.details["resolutions_tried"].as_array()) {
-            for line in t {
-                println!("   tried {}", line.as_str().unwrap_or_default());
+        if let Some(l) = r.lattice() {
+            println!("   lattices meshed: {}", serde_json::json!(l.lattices_meshed));
+            if let Some(f) = &l.feature_sheets {
+                println!("   feature sheets: {}", serde_json::json!(f));
+            }
+            for line in l.resolutions_tried.iter().flatten() {
+                println!("   tried {line}");
             }
         }
         for s in &r.stages {
-            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {:.1} s {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.seconds, s.details.to_string().chars().take(300).collect::<String>());
+            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {:.1} s {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.seconds, s.details_json().to_string().chars().take(300).collect::<String>());
         }
         sddpm::export::vtk::write_vtk_legacy(std::path::Path::new("/tmp/voxel_probe.vtk"), &r.mesh, "voxel", &[("scaled_jacobian", &r.scaled_jacobian)]).ok();
         return Ok(());
@@ -93,9 +91,9 @@ fn main() -> sddpm::Result<()> {
     let variants: Vec<f64> = a[3..].iter().map(|s| s.parse().unwrap()).collect();
     for rd in if variants.is_empty() { vec![0.002] } else { variants } {
         let mut o = RunOptions { spline: None, hex_candidates: 1, ..Default::default() };
-        o.hex.release_distance = rd;
+        o.hex.quality.release_distance = rd;
         // HEX_NO_VOXEL=1: the polycube mesh alone, without the grid-based fallback
-        o.hex.voxel_fallback = std::env::var("HEX_NO_VOXEL").map_or(true, |v| v != "1");
+        o.hex.fallback.enabled = std::env::var("HEX_NO_VOXEL").map_or(true, |v| v != "1");
         let t = std::time::Instant::now();
         let r = run(&model, &mesh, genus, &ContextRequest::Contexts(vec![ctx]), &o, &mut sddpm::error::NoProgress)?;
         let q = &r.hex.quality;
@@ -105,7 +103,7 @@ fn main() -> sddpm::Result<()> {
         );
         println!("   surface map: {:?}", r.hex.surface_map);
         for s in &r.hex.stages {
-            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.details);
+            println!("   {} {} -> {} inverted, min {:.3} -> {:.3} {}", s.stage, s.before.inverted, s.after.inverted, s.before.min, s.after.min, s.details_json());
         }
         sddpm::export::vtk::write_vtk_legacy(std::path::Path::new("/tmp/voxel_probe.vtk"), &r.hex.mesh, "hex", &[("scaled_jacobian", &r.hex.scaled_jacobian)]).ok();
     }

@@ -17,7 +17,7 @@ fn options(seed: u64) -> RunOptions {
     o.polycube.seed = seed;
     o.polycube.sampler.seed = seed;
     o.polycube.sampler.steps = 10;
-    o.hex.level = Some(1);
+    o.hex.map.level = Some(1);
     o
 }
 
@@ -147,7 +147,7 @@ fn cancel_at_every_stage_of_the_voxel_fallback() {
 }
 
 /// A level the caller fixes is honoured: the grid-based fallback replaces a valid
-/// polycube mesh only when the level is chosen automatically (HexOptions::voxel_fallback).
+/// polycube mesh only when the level is chosen automatically (FallbackOptions::enabled).
 #[test]
 fn a_fixed_level_keeps_the_valid_polycube_mesh() {
     let model = Model::default_model().unwrap();

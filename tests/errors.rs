@@ -140,19 +140,19 @@ fn every_status_is_produced() {
     // inverted elements, and the caller asked for a valid mesh or nothing
     let rod = load("hexgen_rod.obj");
     let mut ro = RunOptions { polycube: fast.clone(), require_valid_hex: true, accept_unverified: true, spline: None, hex_candidates: 1, ..Default::default() };
-    ro.hex.level = Some(1);
+    ro.hex.map.level = Some(1);
     // the polycube's mesh alone: the grid-based fallback (a minute and more on the
     // rod, with tests of its own) would stand in for it
-    ro.hex.voxel_fallback = false;
+    ro.hex.fallback.enabled = false;
     let two = Context::parse("THC+Y,THC+Y,0,0,0,0,0,0,0,0,0,0").unwrap();
     let r = run(&model, &rod, 2, &ContextRequest::Contexts(vec![two]), &ro, &mut NoProgress);
     let (st, msg) = status_of(r);
     if st == Status::Ok {
         // the mesh came out valid: then MESHING_FAILED must still be reachable through
         // the mapped mesh alone (no quality steps), which folds on this part
-        ro.hex.pillow = false;
-        ro.hex.smooth_iterations = 0;
-        ro.hex.optimise_passes = 0;
+        ro.hex.quality.pillow = false;
+        ro.hex.quality.smooth_iterations = 0;
+        ro.hex.quality.optimise_passes = 0;
         let r = run(&model, &rod, 2, &ContextRequest::Contexts(vec![Context::parse("THC+Y,THC+Y,0,0,0,0,0,0,0,0,0,0").unwrap()]), &ro, &mut NoProgress);
         push(status_of(r));
     } else {

@@ -9,7 +9,7 @@ use sddpm::error::NoProgress;
 use sddpm::export::hexfmt::{read_lsdyna, read_medit, read_vtu, write_lsdyna, write_medit, write_vtu};
 use sddpm::export::vtk::{read_vtk_legacy, write_vtk_legacy};
 use sddpm::hex::quality::element_qualities;
-use sddpm::hex::{build_hex_mesh, HexInput, HexMesh, HexOptions};
+use sddpm::hex::{build_hex_mesh, HexInput, HexMesh, HexOptions, MapOptions};
 use sddpm::mesh::{LoadOptions, TriMesh};
 use std::path::PathBuf;
 
@@ -98,7 +98,7 @@ fn pipeline_meshes_round_trip() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     let mesh = TriMesh::load(dir.join("cgal_hole.off"), &LoadOptions::default()).unwrap();
     let input = HexInput::from_user_mesh(&mesh, Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()).unwrap();
-    let r = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut NoProgress).unwrap();
+    let r = build_hex_mesh(&input, &HexOptions { map: MapOptions { level: Some(1), ..Default::default() }, ..Default::default() }, &mut NoProgress).unwrap();
     assert_eq!(r.scaled_jacobian, element_qualities(&r.mesh));
     write_all("hole_level1", &r.mesh);
     // the mapped mesh too: it has elements of every quality down to nearly flat ones
@@ -110,7 +110,7 @@ fn run_folder_files_and_report_keys() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
     let mesh = TriMesh::load(dir.join("cinolib_torus.obj"), &LoadOptions::default()).unwrap();
     let input = HexInput::from_user_mesh(&mesh, Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()).unwrap();
-    let r = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut NoProgress).unwrap();
+    let r = build_hex_mesh(&input, &HexOptions { map: MapOptions { level: Some(1), ..Default::default() }, ..Default::default() }, &mut NoProgress).unwrap();
     let out = fixtures().join("run");
     std::fs::create_dir_all(&out).unwrap();
     sddpm::export::hexfmt::write_hex_files(&out, &r).unwrap();

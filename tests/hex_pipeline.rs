@@ -6,7 +6,7 @@ use sddpm::error::NoProgress;
 use sddpm::geometry::vec3::*;
 use sddpm::hex::quality::{element_qualities, summarize};
 use sddpm::hex::topology::{hex_volume, mesh_volume};
-use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexOptions, HexResult};
+use sddpm::hex::{build_hex_mesh, Affine, Domain, HexInput, HexOptions, HexResult, Stage};
 use sddpm::mesh::{LoadOptions, TriMesh};
 use sddpm::context::context_frame;
 
@@ -45,6 +45,13 @@ fn polycube_surface(ctx: &Context, k: usize, deform: impl Fn([f64; 3]) -> [f64; 
     TriMesh { vertices: verts.into_iter().map(deform).collect(), triangles: tris }
 }
 
+/// The default options with the subdivision level fixed.
+fn at_level(level: u32) -> HexOptions {
+    let mut o = HexOptions::default();
+    o.map.level = Some(level);
+    o
+}
+
 fn run(input: &HexInput, opts: &HexOptions) -> HexResult {
     build_hex_mesh(input, opts, &mut NoProgress).expect("hex mesh")
 }
@@ -65,12 +72,12 @@ fn unit_box_gives_a_perfect_grid() {
     // user frame: the unit box [0,1]^3
     let input = HexInput { surface, context: ctx, correspondence: vec![], to_user: Affine::similarity(0.5, [0.5; 3]) };
     for level in 0..=2 {
-        let r = run(&input, &HexOptions { level: Some(level), ..Default::default() });
+        let r = run(&input, &at_level(level));
         let n = 3usize << level;
         assert_eq!(r.mapped.elements.len(), n * n * n);
         let q = summarize(&element_qualities(&r.mapped));
         assert!((q.min - 1.0).abs() < 1e-12, "level {level}: mapped min {}", q.min);
-        assert_eq!(r.stages[0].stage, "mapping");
+        assert_eq!(r.stages[0].stage, Stage::Mapping);
         assert!((r.stages[0].after.min - 1.0).abs() < 1e-12);
         // the mapped grid is the regular grid of the unit box
         for p in &r.mapped.nodes {
@@ -103,7 +110,7 @@ fn synthetic_thc_and_bhc_are_valid_with_the_input_volume() {
         let user = TriMesh { vertices: surface.vertices.iter().map(|&p| to_user.apply(p)).collect(), triangles: surface.triangles.clone() };
         let vol = user.signed_volume();
         let input = HexInput { surface, context: ctx, correspondence: vec![], to_user };
-        let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+        let r = run(&input, &at_level(2));
         assert_eq!(r.quality.inverted, 0, "{labels}");
         assert!(r.quality.min > 0.3, "{labels}: min {}", r.quality.min);
         assert!(((r.volume - vol) / vol).abs() < 0.01, "{labels}: volume {} vs {}", r.volume, vol);
@@ -125,14 +132,14 @@ fn real(file: &str, labels: &str) -> (HexInput, f64) {
 #[test]
 fn real_thc_input_is_valid_with_the_input_volume() {
     let (input, vol) = real("cgal_hole.off", "THC+Z,0,0,0,0,0,0,0,0,0,0,0");
-    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    let r = run(&input, &at_level(2));
     assert_eq!(r.quality.inverted, 0);
     assert!(r.quality.min >= 0.3, "min {}", r.quality.min);
     assert!(((r.volume - vol) / vol).abs() < 0.01, "volume {} vs {}", r.volume, vol);
     assert!(r.hausdorff_relative < 0.01);
     assert_never_worse(&r);
     let (input, vol) = real("cinolib_torus.obj", "THC+Z,0,0,0,0,0,0,0,0,0,0,0");
-    let r = run(&input, &HexOptions { level: Some(2), ..Default::default() });
+    let r = run(&input, &at_level(2));
     assert_eq!(r.quality.inverted, 0);
     assert!(((r.volume - vol) / vol).abs() < 0.015, "volume {} vs {}", r.volume, vol);
     assert_never_worse(&r);
@@ -143,7 +150,8 @@ fn stopping_rule_picks_a_level_within_the_range() {
     let ctx = thc_context();
     let surface = polycube_surface(&ctx, 4, |p| [p[0], p[1], p[2] + 0.1 * (p[0] * 2.0).sin()]);
     let input = HexInput { surface, context: ctx, correspondence: vec![], to_user: Affine::IDENTITY };
-    let opts = HexOptions { min_level: 1, max_level: 3, threshold: 0.004, ..Default::default() };
+    let mut opts = HexOptions::default();
+    (opts.map.min_level, opts.map.max_level, opts.map.threshold) = (1, 3, 0.004);
     let r = run(&input, &opts);
     assert!((1..=3).contains(&r.level));
     let chosen = r.levels.iter().find(|l| l.level == r.level).unwrap();
@@ -151,7 +159,7 @@ fn stopping_rule_picks_a_level_within_the_range() {
         // below the threshold, or stalled against the level before
         let d = chosen.deviation.unwrap();
         let before = r.levels.iter().find(|l| l.level + 1 == r.level).and_then(|l| l.deviation);
-        assert!(d <= 0.004 || before.is_some_and(|b| d > opts.stall_ratio * b), "{d}");
+        assert!(d <= 0.004 || before.is_some_and(|b| d > opts.map.stall_ratio * b), "{d}");
     }
     for l in r.levels.iter().filter(|l| l.level >= 1 && l.level < r.level) {
         assert!(l.deviation.unwrap() > 0.004, "level {} passed the rule but a finer one was chosen", l.level);
@@ -174,7 +182,7 @@ fn bad_inputs_are_refused() {
     // cancel through the progress callback
     let input = HexInput { surface: polycube_surface(&thc_context(), 1, |p| p), context: thc_context(), correspondence: vec![], to_user: Affine::IDENTITY };
     let mut cancel = |_f: f64, stage: &str| !stage.contains("pillow");
-    let e = build_hex_mesh(&input, &HexOptions { level: Some(1), ..Default::default() }, &mut cancel).unwrap_err();
+    let e = build_hex_mesh(&input, &at_level(1), &mut cancel).unwrap_err();
     assert_eq!(e.status(), sddpm::Status::Cancelled);
 }
 
@@ -189,7 +197,7 @@ fn correspondence_seed_is_used_and_harmless() {
         corr.push((*p, [p[0] + noise, p[1] - noise, p[2]]));
     }
     let input = HexInput { surface, context: ctx, correspondence: corr, to_user: Affine::IDENTITY };
-    let r = run(&input, &HexOptions { level: Some(2), use_correspondence: true, ..Default::default() });
+    let r = run(&input, &HexOptions { map: sddpm::hex::MapOptions { level: Some(2), use_correspondence: true, ..Default::default() }, ..Default::default() });
     assert!(r.surface_map.correspondence_pairs > 0);
     assert_eq!(r.quality.inverted, 0);
     assert_never_worse(&r);
@@ -209,7 +217,7 @@ fn an_unverified_genus_0_job_also_tries_plain_cubes() {
     let req = ContextRequest::Contexts(vec![Context::parse("BHC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap()]);
     let mut o = RunOptions { spline: None, ..Default::default() };
     o.polycube.sampler.steps = 5;
-    o.hex.level = Some(1);
+    o.hex.map.level = Some(1);
     let r = run(&model, &mesh, 0, &req, &o, &mut NoProgress).unwrap();
     assert!(!r.verified);
     let names: Vec<String> = r.polycube.candidates.iter().map(|c| c.context.names()).collect();
@@ -250,10 +258,11 @@ fn voxel_fallback_gives_a_valid_mesh_of_the_inputs_genus() {
     for (file, genus) in [("hexgen_rod.obj", 2), ("cinolib_3holes.obj", 3)] {
         let mesh = TriMesh::load(dir.join(file), &LoadOptions::default()).unwrap();
         assert_eq!(mesh.validate().unwrap().genus, Some(genus));
-        let opts = HexOptions { voxel_refinements: 0, ..Default::default() };
+        let mut opts = HexOptions::default();
+        opts.fallback.refinements = 0;
         let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &Affine::similarity(1.0, [0.0; 3]), genus, &opts, &mut NoProgress).unwrap();
-        assert_eq!(r.domain, "voxel 24");
-        assert!(r.domain.starts_with("voxel"), "{}", r.domain);
+        assert_eq!(r.domain, Domain::Voxel { resolution: 24 });
+        assert_eq!(r.domain.to_string(), "voxel 24");
         assert_eq!(r.quality.inverted, 0, "{file}: {:?}", r.quality);
         assert!(r.quality.min > 0.3, "{file}: {:?}", r.quality);
         let vol = mesh.signed_volume().abs();
@@ -288,17 +297,18 @@ fn voxel_fallback_refines_its_lattice_until_the_goals_are_met() {
     let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &frame, 2, &opts, &mut NoProgress).unwrap();
     assert_eq!(opts.goals.missed(&r), 0, "{}: {:?}, Hausdorff {}", r.domain, r.quality, r.hausdorff_relative);
     assert_eq!(boundary_genus(&r.mesh), 2);
-    let meshed = r.stages[0].details["lattices_meshed"].as_array().expect("lattices_meshed").clone();
+    let meshed = r.stages[0].details_json()["lattices_meshed"].as_array().expect("lattices_meshed").clone();
     let res: Vec<u64> = meshed.iter().map(|m| m["resolution"].as_u64().unwrap()).collect();
     let h = |i: usize| meshed[i]["hausdorff_relative"].as_f64().unwrap();
     // the first lattice misses the goal, the finer one meets it with room
     assert_eq!(res[..2], [24, 48], "{meshed:?}");
     assert!(h(0) > opts.goals.hausdorff && h(1) < 0.95 * opts.goals.hausdorff, "{meshed:?}");
-    assert!(r.hausdorff_relative < h(0) && r.domain != "voxel 24", "{} {meshed:?}", r.domain);
+    assert!(r.hausdorff_relative < h(0) && r.domain != Domain::Voxel { resolution: 24 }, "{} {meshed:?}", r.domain);
     // two coarser lattices after the finest, each coarser than the last
     assert!(res.len() >= 4 && res[2] < 48 && res[3] < res[2], "{meshed:?}");
     // kept: a lattice coarser than the first prediction, with fewer elements
-    let kept: u64 = r.domain.trim_start_matches("voxel ").parse().unwrap();
+    let Domain::Voxel { resolution } = r.domain else { panic!("{}", r.domain) };
+    let kept = resolution as u64;
     assert!(kept < res[2], "{} {meshed:?}", r.domain);
     assert!(r.quality.elements < meshed[2]["elements"].as_u64().unwrap() as usize, "{} {meshed:?}", r.quality.elements);
 }
@@ -320,7 +330,8 @@ fn at_hexgen_s_element_count_the_rod_s_minimum_and_mean_are_at_least_hexgen_s() 
     assert!((theirs.min - 0.319).abs() < 5e-4 && (theirs.mean - 0.832).abs() < 5e-4, "{theirs:?}");
     let mesh = TriMesh::load(dir.join("hexgen_rod.obj"), &LoadOptions::default()).unwrap();
     let frame = Affine::similarity(1.0, [0.0; 3]);
-    let opts = HexOptions { voxel_resolution: 28, voxel_refinements: 0, pin_uncovered: 0.6, ..Default::default() };
+    let mut opts = HexOptions::default();
+    (opts.fallback.resolution, opts.fallback.refinements, opts.quality.pin_uncovered) = (28, 0, 0.6);
     let r = sddpm::hex::build_voxel_hex_mesh(&mesh, &frame, 2, &opts, &mut NoProgress).unwrap();
     let ours = &r.quality;
     assert!(ours.elements as f64 <= 1.5 * hexgen.elements.len() as f64, "{} elements", ours.elements);

@@ -3,6 +3,7 @@
 use super::common::{load_checked, Loaded};
 use super::polycube::{load_generator, options_of, request_of, PolycubeArgs};
 use sddpm::error::Error;
+use sddpm::hex::{HexOption, HexOptions};
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, RunOptions};
 use sddpm::Result;
@@ -69,63 +70,60 @@ pub struct HexArgs {
     pub max_elements: Option<usize>,
 }
 
-/// The hex-stage options of the arguments on top of `hex`, each checked (an
-/// out-of-range value is an error naming the option).
-pub fn hex_options(a: &HexArgs, hex: &mut sddpm::hex::HexOptions) -> Result<()> {
-    hex.level = a.level;
+/// The hex-stage options of the arguments on top of `hex`, checked by
+/// [`HexOptions::validate`] (an out-of-range value is an error naming its flag).
+pub fn hex_options(a: &HexArgs, hex: &mut HexOptions) -> Result<()> {
+    hex.map.level = a.level;
     if let Some(n) = a.voxel_resolution {
-        if !(2..=sddpm::hex::voxel::VOXEL_MAX_RESOLUTION).contains(&n) {
-            return Err(Error::InvalidArgument(format!("--voxel-resolution must be between 2 and {}, got {n}", sddpm::hex::voxel::VOXEL_MAX_RESOLUTION)));
-        }
-        hex.voxel_resolution = n;
+        hex.fallback.resolution = n;
     }
     if let Some(n) = a.voxel_refinements {
-        hex.voxel_refinements = n;
+        hex.fallback.refinements = n;
     }
-    hex.capture_features = !a.no_capture_features;
-    hex.feature_sheets = !a.no_feature_sheets;
+    hex.quality.capture_features = !a.no_capture_features;
+    hex.quality.feature_sheets = !a.no_feature_sheets;
     if let Some(n) = a.local_refinement {
-        hex.local_refinement = n;
+        hex.fallback.local_refinement = n;
     }
     if let Some(d) = a.feature_median_angle {
-        if !(0.0..=180.0).contains(&d) {
-            return Err(Error::InvalidArgument(format!("--feature-median-angle must be an angle in degrees in [0, 180], got {d}")));
-        }
-        hex.feature_median_angle = d;
+        hex.surface.feature_median_angle = d;
     }
     if let Some(f) = a.lattice_planes {
-        if !(0.0..1.0).contains(&f) {
-            return Err(Error::InvalidArgument(format!("--lattice-planes must be a share of the area in [0, 1), got {f}")));
-        }
-        hex.lattice_planes = f;
+        hex.fallback.lattice_planes = f;
     }
     if let Some(f) = a.pin_uncovered {
-        if !(f.is_finite() && f >= 0.0) {
-            return Err(Error::InvalidArgument(format!("--pin-uncovered must be a finite number >= 0, got {f}")));
-        }
-        hex.pin_uncovered = f;
+        hex.quality.pin_uncovered = f;
     }
-    for (name, value, goal) in [("--goal-min-sj", a.goal_min_sj, &mut hex.goals.min_scaled_jacobian), ("--goal-mean-sj", a.goal_mean_sj, &mut hex.goals.mean_scaled_jacobian)] {
-        if let Some(s) = value {
-            if !(s > -1.0 && s <= 1.0) {
-                return Err(Error::InvalidArgument(format!("{name} must be a scaled Jacobian in (-1, 1], got {s}")));
-            }
-            *goal = s;
-        }
+    if let Some(s) = a.goal_min_sj {
+        hex.goals.min_scaled_jacobian = s;
+    }
+    if let Some(s) = a.goal_mean_sj {
+        hex.goals.mean_scaled_jacobian = s;
     }
     if let Some(d) = a.goal_hausdorff {
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(Error::InvalidArgument(format!("--goal-hausdorff must be a finite fraction of the bounding-box diagonal > 0, got {d}")));
-        }
         hex.goals.hausdorff = d;
     }
     if let Some(n) = a.max_elements {
-        if n == 0 {
-            return Err(Error::InvalidArgument("--max-elements must be at least 1, got 0".into()));
-        }
         hex.max_elements = n;
     }
-    Ok(())
+    hex.validate().map_err(|e| Error::InvalidArgument(format!("{} must be {}, got {}", flag(e.option), e.expected, e.value)))
+}
+
+/// The flag of `sddpm run` that sets a hex option (the core's path for the
+/// options no flag sets, whose defaults are valid).
+fn flag(o: HexOption) -> &'static str {
+    match o {
+        HexOption::Level => "--level",
+        HexOption::VoxelResolution => "--voxel-resolution",
+        HexOption::FeatureMedianAngle => "--feature-median-angle",
+        HexOption::LatticePlanes => "--lattice-planes",
+        HexOption::PinUncovered => "--pin-uncovered",
+        HexOption::GoalMinScaledJacobian => "--goal-min-sj",
+        HexOption::GoalMeanScaledJacobian => "--goal-mean-sj",
+        HexOption::GoalHausdorff => "--goal-hausdorff",
+        HexOption::MaxElements => "--max-elements",
+        other => other.path(),
+    }
 }
 
 pub fn run(a: &RunArgs) -> Result<i32> {

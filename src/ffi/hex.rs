@@ -5,7 +5,7 @@ use super::model::SddpmPolycube;
 use super::{c_path, copy_slice, copy_string, ffi_boundary, non_null, CProgress, SddpmProgressCb};
 use crate::error::{Error, Result, Status};
 use crate::hex::quality::{element_qualities, summarize};
-use crate::hex::{HexMesh, HexOptions, HexResult};
+use crate::hex::{HexMesh, HexOption, HexOptions, HexResult};
 use crate::mesh::TriMesh;
 use crate::pipeline::{build_hex_for_polycube, fallback_order, ranked_verified, RunOptions};
 use std::ffi::{c_char, c_void};
@@ -138,80 +138,86 @@ pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) ->
         let r = RunOptions::default();
         *out = SddpmHexOptions {
             level: -1,
-            min_level: h.min_level,
-            max_level: h.max_level,
-            threshold: h.threshold,
+            min_level: h.map.min_level,
+            max_level: h.map.max_level,
+            threshold: h.map.threshold,
             max_elements: h.max_elements,
-            feature_angle: h.feature_angle,
-            pillow: h.pillow,
-            smooth_iterations: h.smooth_iterations as u32,
-            optimise_passes: h.optimise_passes as u32,
-            optimise_target: h.optimise_target,
+            feature_angle: h.surface.feature_angle,
+            pillow: h.quality.pillow,
+            smooth_iterations: h.quality.smooth_iterations as u32,
+            optimise_passes: h.quality.optimise_passes as u32,
+            optimise_target: h.quality.optimise_target,
             hex_candidates: r.hex_candidates as u32,
             accept_unverified: r.accept_unverified,
-            voxel_fallback: h.voxel_fallback,
-            voxel_resolution: h.voxel_resolution as u32,
+            voxel_fallback: h.fallback.enabled,
+            voxel_resolution: h.fallback.resolution as u32,
             goal_min_scaled_jacobian: h.goals.min_scaled_jacobian,
             goal_mean_scaled_jacobian: h.goals.mean_scaled_jacobian,
             goal_hausdorff: h.goals.hausdorff,
-            voxel_refinements: h.voxel_refinements as u32,
-            pin_uncovered: h.pin_uncovered,
-            capture_features: h.capture_features,
-            local_refinement: h.local_refinement as u32,
-            feature_sheets: h.feature_sheets,
+            voxel_refinements: h.fallback.refinements as u32,
+            pin_uncovered: h.quality.pin_uncovered,
+            capture_features: h.quality.capture_features,
+            local_refinement: h.fallback.local_refinement as u32,
+            feature_sheets: h.quality.feature_sheets,
         };
         Ok(())
     }
 }
 
+/// The core options of the C options (None: the defaults), checked by
+/// [`HexOptions::validate`] with the bad option named by its C field; with the
+/// run's `hex_candidates` and `accept_unverified`.
 fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)> {
     let mut h = HexOptions::default();
     let r = RunOptions::default();
     let Some(o) = o else { return Ok((h, r.hex_candidates, r.accept_unverified)) };
-    if o.level < -1 || o.level > 6 || o.max_level > 6 || o.min_level > o.max_level {
-        return Err(Error::InvalidArgument(format!(
-            "hex options: level {} / min_level {} / max_level {} (levels are 0..6, -1 = automatic, min <= max)",
-            o.level, o.min_level, o.max_level
-        )));
+    if o.level < -1 {
+        return Err(Error::InvalidArgument(format!("hex options: level must be -1 (automatic) or a subdivision level in 0..=6, got {}", o.level)));
     }
-    if !(o.threshold > 0.0 && o.threshold.is_finite()) || !(o.feature_angle.is_finite()) || !(o.optimise_target.is_finite()) {
-        return Err(Error::InvalidArgument("hex options: threshold must be positive and finite, angles and targets finite".into()));
-    }
-    if !(o.goal_min_scaled_jacobian.is_finite() && o.goal_mean_scaled_jacobian.is_finite() && o.goal_hausdorff >= 0.0 && o.goal_hausdorff.is_finite()) {
-        return Err(Error::InvalidArgument(format!(
-            "hex options: goals must be finite and the Hausdorff goal non-negative (min {}, mean {}, Hausdorff {})",
-            o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff
-        )));
-    }
-    if !(o.pin_uncovered >= 0.0 && o.pin_uncovered.is_finite()) {
-        return Err(Error::InvalidArgument(format!("hex options: pin_uncovered {} (a finite number >= 0)", o.pin_uncovered)));
-    }
-    if o.voxel_resolution < 2 {
-        return Err(Error::InvalidArgument(format!("hex options: voxel_resolution {} (at least 2)", o.voxel_resolution)));
-    }
-    h.level = (o.level >= 0).then_some(o.level as u32);
-    h.min_level = o.min_level;
-    h.max_level = o.max_level;
-    h.threshold = o.threshold;
-    h.max_elements = o.max_elements.max(1);
-    h.feature_angle = o.feature_angle;
-    h.pillow = o.pillow;
-    h.smooth_iterations = o.smooth_iterations as usize;
-    h.optimise_passes = o.optimise_passes as usize;
-    h.optimise_target = o.optimise_target;
-    h.voxel_fallback = o.voxel_fallback;
-    h.voxel_resolution = o.voxel_resolution as usize;
-    h.voxel_refinements = o.voxel_refinements as usize;
-    h.pin_uncovered = o.pin_uncovered;
-    h.capture_features = o.capture_features;
-    h.local_refinement = o.local_refinement as usize;
-    h.feature_sheets = o.feature_sheets;
+    h.map.level = (o.level >= 0).then_some(o.level as u32);
+    h.map.min_level = o.min_level;
+    h.map.max_level = o.max_level;
+    h.map.threshold = o.threshold;
+    h.max_elements = o.max_elements;
+    h.surface.feature_angle = o.feature_angle;
+    h.quality.pillow = o.pillow;
+    h.quality.smooth_iterations = o.smooth_iterations as usize;
+    h.quality.optimise_passes = o.optimise_passes as usize;
+    h.quality.optimise_target = o.optimise_target;
+    h.quality.pin_uncovered = o.pin_uncovered;
+    h.quality.capture_features = o.capture_features;
+    h.quality.feature_sheets = o.feature_sheets;
+    h.fallback.enabled = o.voxel_fallback;
+    h.fallback.resolution = o.voxel_resolution as usize;
+    h.fallback.refinements = o.voxel_refinements as usize;
+    h.fallback.local_refinement = o.local_refinement as usize;
     h.goals = crate::hex::QualityGoals {
         min_scaled_jacobian: o.goal_min_scaled_jacobian,
         mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
         hausdorff: o.goal_hausdorff,
     };
+    h.validate().map_err(|e| Error::InvalidArgument(format!("hex options: {} must be {}, got {}", c_field(e.option), e.expected, e.value)))?;
     Ok((h, (o.hex_candidates as usize).max(1), o.accept_unverified))
+}
+
+/// The field of sddpm_hex_options that sets a hex option (the core's path for
+/// the options the C struct leaves at their defaults).
+fn c_field(o: HexOption) -> &'static str {
+    match o {
+        HexOption::Level => "level",
+        HexOption::MinLevel => "min_level",
+        HexOption::MaxLevel => "max_level",
+        HexOption::Threshold => "threshold",
+        HexOption::FeatureAngle => "feature_angle",
+        HexOption::OptimiseTarget => "optimise_target",
+        HexOption::PinUncovered => "pin_uncovered",
+        HexOption::VoxelResolution => "voxel_resolution",
+        HexOption::GoalMinScaledJacobian => "goal_min_scaled_jacobian",
+        HexOption::GoalMeanScaledJacobian => "goal_mean_scaled_jacobian",
+        HexOption::GoalHausdorff => "goal_hausdorff",
+        HexOption::MaxElements => "max_elements",
+        other => other.path(),
+    }
 }
 
 /// Build the all-hex mesh of a polycube result: the best of its verified candidates
@@ -247,7 +253,7 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
             if !accept {
                 return Err(refusal());
             }
-            hopts.use_correspondence = false;
+            hopts.map.use_correspondence = false;
             let r = result.to_mut();
             let genus = r.input_genus;
             let o = fallback_order(r, &pc.mesh, &pc.options, genus, n);
@@ -488,17 +494,24 @@ mod tests {
         let o = unsafe { o.assume_init() };
         let (h, _, _) = hex_options(Some(&o)).unwrap();
         assert_eq!(h.goals, crate::hex::QualityGoals::default());
-        assert_eq!(h.voxel_resolution, HexOptions::default().voxel_resolution);
-        for bad in [SddpmHexOptions { goal_hausdorff: f64::NAN, ..o }, SddpmHexOptions { goal_hausdorff: -0.01, ..o }, SddpmHexOptions { goal_mean_scaled_jacobian: f64::INFINITY, ..o }] {
+        assert_eq!(h, HexOptions::default());
+        for (bad, field) in [
+            (SddpmHexOptions { goal_hausdorff: f64::NAN, ..o }, "goal_hausdorff"),
+            (SddpmHexOptions { goal_hausdorff: -0.01, ..o }, "goal_hausdorff"),
+            (SddpmHexOptions { goal_mean_scaled_jacobian: f64::INFINITY, ..o }, "goal_mean_scaled_jacobian"),
+            (SddpmHexOptions { max_elements: 0, ..o }, "max_elements"),
+            (SddpmHexOptions { min_level: 5, ..o }, "min_level"),
+            (SddpmHexOptions { level: -2, ..o }, "level"),
+        ] {
             let e = hex_options(Some(&bad)).unwrap_err().to_string();
-            assert!(e.contains("goals"), "{e}");
+            assert!(e.starts_with(&format!("hex options: {field} must be")), "{e}");
         }
         let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
-        assert!(e.contains("voxel_resolution 1"), "{e}");
+        assert!(e.contains("voxel_resolution must be between 2 and 192, got 1"), "{e}");
         let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, local_refinement: 3, feature_sheets: false, ..o })).unwrap();
-        assert_eq!((h.voxel_refinements, h.pin_uncovered, h.capture_features, h.local_refinement, h.feature_sheets), (0, 0.6, false, 3, false));
+        assert_eq!((h.fallback.refinements, h.quality.pin_uncovered, h.quality.capture_features, h.fallback.local_refinement, h.quality.feature_sheets), (0, 0.6, false, 3, false));
         assert_eq!((o.local_refinement, o.feature_sheets), (0, true));
-        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().voxel_refinements, 0.0, true));
+        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().fallback.refinements, 0.0, true));
         for bad in [f64::NAN, -0.1, f64::INFINITY] {
             let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();
             assert!(e.contains("pin_uncovered"), "{e}");

@@ -6,9 +6,11 @@
 //! positively oriented (right-handed), so in grid units every element has scaled
 //! Jacobian exactly 1.
 
+use super::topology::HEX_FACES;
 use super::HexMesh;
 use crate::polycube::primitive::SUB;
 use crate::geometry::VoxelGrid;
+use std::collections::HashMap;
 
 /// A polycube hex mesh at one subdivision level, with its lattice bookkeeping.
 #[derive(Debug, Clone)]
@@ -29,11 +31,6 @@ pub struct LatticeHex {
 }
 
 impl LatticeHex {
-    /// Lattice spacing in grid units.
-    pub fn spacing(&self) -> f64 {
-        1.0 / (SUB * self.subdiv) as f64
-    }
-
     /// Node id at lattice point p, if used.
     pub fn node_at(&self, p: [usize; 3]) -> Option<u32> {
         if p[0] >= self.dims[0] || p[1] >= self.dims[1] || p[2] >= self.dims[2] {
@@ -121,6 +118,43 @@ pub fn prolong(coarse: &LatticeHex, coarse_pos: &[[f64; 3]], fine: &LatticeHex) 
             acc.map(|v| v / cnt)
         })
         .collect()
+}
+
+/// Bitmask of outward axis directions (+X,-X,+Y,-Y,+Z,-Z -> bits 0..5) of the boundary
+/// quads around each node of a lattice hex mesh (0 for interior nodes).
+pub fn normal_masks(h: &LatticeHex) -> Vec<u8> {
+    let mut mask = vec![0u8; h.mesh.nodes.len()];
+    let faces = boundary_faces_lattice(h);
+    for (q, dir) in faces {
+        for v in q {
+            mask[v as usize] |= 1 << dir;
+        }
+    }
+    mask
+}
+
+/// Boundary quads of a lattice hex mesh with their outward axis direction code.
+pub fn boundary_faces_lattice(h: &LatticeHex) -> Vec<([u32; 4], u8)> {
+    // face f of an element at lattice cell c is on the boundary when the element
+    // across it does not exist
+    let mut occupied: HashMap<[u32; 3], ()> = HashMap::with_capacity(h.elem_lattice.len());
+    for c in &h.elem_lattice {
+        occupied.insert(*c, ());
+    }
+    // HEX_FACES order: -Z, +Z, -Y, +X, +Y, -X
+    const DIRS: [(i64, i64, i64, u8); 6] = [(0, 0, -1, 5), (0, 0, 1, 4), (0, -1, 0, 3), (1, 0, 0, 0), (0, 1, 0, 2), (-1, 0, 0, 1)];
+    let mut out = Vec::new();
+    for (e, c) in h.elem_lattice.iter().enumerate() {
+        for (f, d) in DIRS.iter().enumerate() {
+            let n = [c[0] as i64 + d.0, c[1] as i64 + d.1, c[2] as i64 + d.2];
+            let inside = n.iter().all(|&v| v >= 0) && occupied.contains_key(&[n[0] as u32, n[1] as u32, n[2] as u32]);
+            if !inside {
+                let el = h.mesh.elements[e];
+                out.push((HEX_FACES[f].map(|i| el[i]), d.3));
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

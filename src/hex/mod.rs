@@ -1,27 +1,47 @@
 //! All-hex control mesh: parametric mapping of the polycube, octree subdivision,
 //! pillowing, smoothing and Jacobian optimisation (issue 6). docs/hex.md describes
 //! the method, the frames and every default.
+//!
+//! By concern:
+//! - [`options`]: the options, nested by concern, and their one check;
+//! - [`map`]: the polycube map, the method of this library ([`build_hex_mesh`]);
+//! - [`voxel`]: the grid-based fallback ([`build_voxel_hex_mesh`]);
+//! - [`quality`]: the quality measure and the quality steps after either, one per file;
+//! - [`goals`], [`report`], [`stages`]: the quality goals and the ranking of
+//!   meshes, the typed result and its report.json object, the steps' reports;
+//! - the shared pieces: the working frame ([`frames`]), the node state and the
+//!   node-local measures ([`work`]), the boundary fit ([`fit`]), the lattice
+//!   meshes ([`grid`], [`lattice`], [`refine`]), the input surface with its sharp
+//!   features ([`surface`]), mesh topology ([`topology`]), the Hausdorff distance
+//!   ([`distance`]) and affine frames ([`frame`]).
 
 pub mod distance;
+pub(crate) mod fit;
 pub mod frame;
+pub(crate) mod frames;
+pub mod goals;
 pub mod grid;
 pub mod lattice;
-pub mod map;
-pub mod optimize;
-pub mod pillow;
-pub mod pipeline;
+mod map;
+pub mod options;
 pub mod quality;
 pub mod refine;
 pub mod report;
-pub mod sheets;
+pub mod stages;
 pub mod surface;
 pub mod topology;
 pub mod voxel;
+pub(crate) mod work;
 
+pub use fit::FitStats;
 pub use frame::Affine;
-pub use pipeline::{build_hex_mesh, HexInput, HexOptions, HexResult, QualityGoals, LevelReport, StageReport, SurfaceMapReport};
-pub use report::report_json;
+pub use goals::QualityGoals;
+pub use map::{build_hex_mesh, HexInput};
+pub use options::{FallbackOptions, HexOption, HexOptions, InvalidHexOption, MapOptions, QualityOptions, SurfaceOptions};
+pub use report::{report_json, Domain, HexResult, LevelReport, Returned, SurfaceMapReport};
+pub use stages::{Stage, StageDetails, StageReport};
 pub use voxel::build_voxel_hex_mesh;
+pub use work::MoveStats;
 
 use serde::{Deserialize, Serialize};
 

@@ -118,7 +118,7 @@ impl Sym {
     }
 }
 
-/// The result of [`refine_box`]: node positions in lattice units (the first nodes are
+/// The result of a refinement ([`refine_boxes`], [`refine_marked`]): node positions in lattice units (the first nodes are
 /// the input's, in its order) and elements in VTK order.
 #[derive(Debug, Clone)]
 pub struct Refined {
@@ -132,7 +132,8 @@ pub struct Refined {
 /// Refine the lattice elements whose corners lie in the box of lattice nodes
 /// `lo..=hi` (inclusive, per axis) three times along each axis, with transition
 /// elements around them. `nodes` are lattice coordinates; every element must be one
-/// lattice cell in VTK order.
+/// lattice cell in VTK order. (Test-only: the pipeline refines several boxes, [`refine_boxes`].)
+#[cfg(test)]
 pub fn refine_box(nodes: &[[u32; 3]], elements: &[[u32; 8]], lo: [u32; 3], hi: [u32; 3]) -> Refined {
     refine_boxes(nodes, elements, &[(lo, hi)])
 }
@@ -151,7 +152,7 @@ fn has_template(m: [bool; 8]) -> bool {
     }
 }
 
-/// [`refine_box`] for the lattice nodes marked in `marked` (one flag per node):
+/// The refinement of `refine_box` for the lattice nodes marked in `marked` (one flag per node):
 /// first every element whose marked corners have no template gets all its corners
 /// marked, until none is left (two boxes a cell apart are bridged there, not
 /// merged into their bounding box); returns the refined mesh and how many nodes
@@ -223,7 +224,7 @@ pub fn in_boxes(p: [u32; 3], boxes: &[([u32; 3], [u32; 3])]) -> bool {
     boxes.iter().any(|(lo, hi)| (0..3).all(|a| p[a] >= lo[a] && p[a] <= hi[a]))
 }
 
-/// [`refine_box`] for several boxes (see [`refine_marked`]).
+/// The refinement of `refine_box` for several boxes (see [`refine_marked`]).
 pub fn refine_boxes(nodes: &[[u32; 3]], elements: &[[u32; 8]], boxes: &[([u32; 3], [u32; 3])]) -> Refined {
     let marked = nodes.iter().map(|&p| in_boxes(p, boxes)).collect();
     refine_marked(nodes, elements, marked).0

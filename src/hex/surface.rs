@@ -286,12 +286,6 @@ impl Surface {
         (self.mesh.vertices[a as usize], self.mesh.vertices[b as usize])
     }
 
-    /// Position of a curve point given by segment and parameter.
-    pub fn curve_eval(&self, c: usize, segment: u32, t: f64) -> [f64; 3] {
-        let (a, b) = self.curve_segment(c, segment as usize);
-        add(a, scale(sub(b, a), t))
-    }
-
     /// Closest point of curve `c` to `p`.
     pub fn closest_on_curve(&self, c: usize, p: [f64; 3]) -> CurvePoint {
         self.closest_on_curve_segments(c, 0..self.curve_segments(c), p)

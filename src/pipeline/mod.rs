@@ -144,7 +144,7 @@ impl Default for RunOptions {
 #[derive(Debug, Clone, Serialize)]
 pub struct HexAttempt {
     /// Index into the polycube's candidates; None for the grid-based fallback
-    /// ([`crate::hex::voxel`]), whose `context` reads "voxel N".
+    /// ([`crate::hex::voxel`]), whose `context` reads "voxel N" ([`crate::hex::Domain`]).
     pub candidate: Option<usize>,
     pub context: String,
     pub min_scaled_jacobian: f64,
@@ -223,6 +223,8 @@ pub fn run(
     opts: &RunOptions,
     progress: &mut dyn Progress,
 ) -> Result<RunResult> {
+    // the hex options are checked before any work
+    opts.hex.validate()?;
     let mut seconds = Vec::new();
     let t0 = Instant::now();
     let (pr, auto, err) = {
@@ -244,7 +246,7 @@ pub fn run(
         if order.is_empty() {
             return Err(e);
         }
-        hex_opts.use_correspondence = false;
+        hex_opts.map.use_correspondence = false;
     } else {
         order = ranked_verified(&pr);
         // verified candidates first; when their meshes fold, the unverified ones
@@ -440,8 +442,8 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
 /// by [`crate::hex::QualityGoals::rank`] (fewest inverted elements, then fewest
 /// missed goals, then highest minimum scaled Jacobian); stops early once a mesh meets
 /// every goal of `hex_opts.goals`. When the best polycube mesh still misses one (with
-/// a fixed `hex_opts.level`: when it keeps inverted elements), the grid-based
-/// fallback is also built (if `hex_opts.voxel_fallback`) and kept when it ranks
+/// a fixed `hex_opts.map.level`: when it keeps inverted elements), the grid-based
+/// fallback is also built (if `hex_opts.fallback.enabled`) and kept when it ranks
 /// better. Progress: 50-85 % of the caller's range.
 pub fn build_hex_for_polycube(
     pr: &PolycubeResult,
@@ -459,7 +461,7 @@ pub fn build_hex_for_polycube(
         let cand = &pr.candidates[ci];
         let input = hex_input(&pr, cand, mesh)?;
         let th = Instant::now();
-        let span = if hex_opts.voxel_fallback { 0.25 } else { 0.35 };
+        let span = if hex_opts.fallback.enabled { 0.25 } else { 0.35 };
         let mut sub = SubProgress { inner: progress, lo: 0.5 + span * k as f64 / n as f64, hi: 0.5 + span * (k + 1) as f64 / n as f64 };
         let r = match build_hex_mesh(&input, hex_opts, &mut sub) {
             Ok(r) => r,
@@ -481,14 +483,14 @@ pub fn build_hex_for_polycube(
     // no polycube mesh meets the goals (or none could be built): the grid-based
     // fallback; with a level the caller fixed, only when every mesh folds (the
     // caller asked for that polycube refinement, not for the best mesh of any kind)
-    let short = best.as_ref().is_none_or(|(_, b)| if hex_opts.level.is_some() { b.quality.inverted > 0 } else { goals.missed(b) > 0 });
-    if hex_opts.voxel_fallback && short {
+    let short = best.as_ref().is_none_or(|(_, b)| if hex_opts.map.level.is_some() { b.quality.inverted > 0 } else { goals.missed(b) > 0 });
+    if hex_opts.fallback.enabled && short {
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };
         let identity = Affine::similarity(1.0, [0.0; 3]);
         match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
             Ok(r) => {
-                attempts.push(HexAttempt::of(None, r.domain.clone(), &r, goals, th));
+                attempts.push(HexAttempt::of(None, r.domain.to_string(), &r, goals, th));
                 if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {
                     // the candidate index stays the best polycube attempt's (or the first)
                     let ci = best.as_ref().map(|(c, _)| *c).or(order.first().copied()).unwrap_or(0);

@@ -2,7 +2,7 @@
 //! order, the 8 corner tetrahedra plus the principal axes at the centre, each
 //! determinant normalised by its three edge lengths, the minimum of the nine.
 
-use super::HexMesh;
+use crate::hex::HexMesh;
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -95,6 +95,11 @@ pub fn summarize(q: &[f64]) -> QualitySummary {
     }
     s.mean /= q.len() as f64;
     s
+}
+
+/// The summary of a mesh's element qualities.
+pub fn summary(m: &HexMesh) -> QualitySummary {
+    summarize(&element_qualities(m))
 }
 
 /// Histogram of scaled Jacobians over `bins` equal bins of [-1, 1].

@@ -9,12 +9,23 @@
 //! orientation of VTK_HEXAHEDRON; the orientation is checked on the result (signed
 //! volume and scaled Jacobian of every new element), not assumed.
 
-use super::map::Role;
-use super::optimize::Work;
-use super::quality::{scaled_jacobian, DEGENERATE};
-use super::topology::{boundary_quads, hex_volume};
-use crate::error::{Error, Result};
+use super::measure::{scaled_jacobian, QualitySummary, DEGENERATE};
+use super::step::stage_report;
+use crate::error::{check_progress, Error, Progress, Result};
 use crate::geometry::vec3::*;
+use crate::hex::stages::{Stage, StageDetails, StageReport};
+use crate::hex::topology::{boundary_quads, hex_volume};
+use crate::hex::work::{Role, Work};
+use std::time::Instant;
+
+/// The pillowing step (`QualityOptions::pillow`): [`pillow`] on the mapped mesh,
+/// whose quality is `before`.
+pub fn pillowing(work: &mut Work, before: QualitySummary, progress: &mut dyn Progress) -> Result<StageReport> {
+    check_progress(progress, 0.55, "hex: pillowing")?;
+    let t0 = Instant::now();
+    let rep: PillowReport = pillow(work)?;
+    Ok(stage_report(Stage::Pillowing, before, &work.mesh, t0, StageDetails::Pillowing(rep)))
+}
 
 /// What pillowing did.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
@@ -57,7 +68,7 @@ pub fn pillow(w: &mut Work) -> Result<PillowReport> {
         let p = q.nodes.map(|i| w.mesh.nodes[i as usize]);
         let nq = cross(sub(p[2], p[0]), sub(p[3], p[1]));
         let el = w.mesh.elements[q.element as usize];
-        let opp = super::topology::HEX_FACES[OPPOSITE[q.face as usize]].map(|i| w.mesh.nodes[el[i] as usize]);
+        let opp = crate::hex::topology::HEX_FACES[OPPOSITE[q.face as usize]].map(|i| w.mesh.nodes[el[i] as usize]);
         let cf = scale(p.iter().fold([0.0; 3], |a, x| add(a, *x)), 0.25);
         let co = scale(opp.iter().fold([0.0; 3], |a, x| add(a, *x)), 0.25);
         let thick = norm(sub(cf, co));
@@ -106,7 +117,7 @@ pub fn pillow(w: &mut Work) -> Result<PillowReport> {
         let [a, b, c, d] = q.nodes;
         w.mesh.elements.push([copy[a as usize], copy[b as usize], copy[c as usize], copy[d as usize], a, b, c, d]);
         if has_targets {
-            let f = super::topology::HEX_FACES[q.face as usize];
+            let f = crate::hex::topology::HEX_FACES[q.face as usize];
             let t = w.target[q.element as usize];
             let (au, av) = (axis_of(f[0], f[1]), axis_of(f[0], f[3]));
             let aw = 3 - au - av;
