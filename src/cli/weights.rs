@@ -21,15 +21,19 @@ pub fn run(a: &WeightsArgs) -> Result<i32> {
     let model = Model::from_file(&a.input, Backend::Flex)?;
     let bytes = if a.half { model.to_bytes_f16()? } else { model.to_bytes()? };
     std::fs::write(&a.output, &bytes).map_err(|e| sddpm::Error::io(a.output.display(), e))?;
+    let arch = match &model.meta.model.field {
+        Some(f) => format!("point denoiser, width {}, {} blocks", f.width, f.blocks),
+        None => format!("U-Net, width {}, point head {}", model.meta.model.base_width, model.meta.model.point_width),
+    };
     println!(
-        "{}: {} parameters, {} bytes ({}), width {}, point head {}, {} epochs",
+        "{}: {} ({} parameters), {} bytes ({}), {} epochs, seed {}",
         a.output.display(),
+        arch,
         model.parameter_count(),
         bytes.len(),
         if a.half { "f16" } else { "f32" },
-        model.meta.model.base_width,
-        model.meta.model.point_width,
-        model.meta.training.epochs
+        model.meta.training.epochs,
+        model.meta.training.seed
     );
     Ok(0)
 }

@@ -105,7 +105,7 @@ pub unsafe extern "C" fn sddpm_model_get_info(m: *const SddpmModel, out: *mut Sd
         let meta = &m.model.meta;
         *out = SddpmModelInfo {
             parameters: m.model.parameter_count(),
-            base_width: meta.model.base_width,
+            base_width: meta.model.field.as_ref().map_or(meta.model.base_width, |f| f.width),
             diffusion_steps: meta.schedule.steps,
             trained_epochs: meta.training.epochs,
             training_seed: meta.training.seed,
