@@ -621,11 +621,6 @@ pub fn occupied_cell_box(labels: &[Primitive; NUM_CELLS]) -> Option<([usize; 3],
     any.then_some((lo, hi))
 }
 
-/// Grid dimensions as f64 (for callers that work in grid units).
-pub fn grid_extent() -> [f64; 3] {
-    [GRID[0] as f64, GRID[1] as f64, GRID[2] as f64]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
