@@ -175,7 +175,7 @@ fn guidance_combines_the_conditional_and_unlabelled_predictions() {
     let t = 30;
     // one strided step from the raw input at t straight to 0 with weight w ...
     let w = 2.5;
-    let opts = SamplerOptions { steps: 1, start_step: t, raw_start: true, guidance: w, ..Default::default() };
+    let opts = SamplerOptions { steps: 1, start_step: t, start_noise: None, raw_start: true, guidance: w, ..Default::default() };
     let got = reverse_diffusion(&m, &[x.clone()], &[ctx], &opts, &mut NoProgress).unwrap().tensors.remove(0);
     // ... is the DDIM step with e_c + w (e_c - e_u)
     let eps = |oh: [f32; 132]| -> Vec<f32> {

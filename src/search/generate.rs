@@ -820,15 +820,16 @@ mod tests {
         // held-in case 26 of `eval-model --cases 96 --min 4 --max 12 --seed 7000`: with
         // the whole-primitive prior its BHC-X cell comes out nearer THC+X (BENCHMARKS.md
         // "TCV centring"); the visible prior's output passes ("The visible prior")
+        // (the template estimate, the only generator with a prior)
         let (truth, mesh) = crate::search::synthetic::cases(7000, 27, 4, 12, &Default::default()).swap_remove(26);
-        let model = Model::default_model().unwrap();
+        let model = Model::template();
         let g = truth.validity().genus.unwrap();
-        let no_retry = PolycubeOptions { visible_retry: false, ..Default::default() };
+        let no_retry = PolycubeOptions { visible_retry: false, ..PolycubeOptions::template() };
         let plain = generate_from_contexts(&model, &mesh, g, &[truth], &no_retry, &mut crate::error::NoProgress).unwrap();
         assert_eq!(plain.candidates[0].stage, Stage::Tcv);
         assert!(plain.chosen.is_none() && !plain.candidates[0].visible_retry);
-        // on by default
-        let r = generate_from_contexts(&model, &mesh, g, &[truth], &PolycubeOptions::default(), &mut crate::error::NoProgress).unwrap();
+        // on in the template estimate's options
+        let r = generate_from_contexts(&model, &mesh, g, &[truth], &PolycubeOptions::template(), &mut crate::error::NoProgress).unwrap();
         let c = &r.candidates[0];
         assert_eq!(c.stage, Stage::Verified);
         assert!(c.visible_retry && r.chosen.is_some());
