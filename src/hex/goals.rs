@@ -2,10 +2,10 @@
 //! candidates' meshes, the fallback's lattices, the feature-sheet variants).
 
 use super::report::HexResult;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Quality targets of a finished mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QualityGoals {
     /// Smallest acceptable minimum scaled Jacobian (default 0.3).
     pub min_scaled_jacobian: f64,

@@ -7,10 +7,10 @@
 use super::goals::QualityGoals;
 use super::voxel::{VOXEL_MAX_RESOLUTION, VOXEL_START_RESOLUTION};
 use crate::error::Error;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Options of the hex stage (defaults in [`HexOptions::default`], docs/hex.md).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HexOptions {
     /// The polycube map: levels and the stopping rule, the start embedding.
     pub map: MapOptions,
@@ -48,7 +48,7 @@ impl Default for HexOptions {
 }
 
 /// Options of the polycube map ([`super::build_hex_mesh`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MapOptions {
     /// Fix the subdivision level instead of choosing it by the stopping rule (default
     /// None; at most [`MAX_LEVEL`]).
@@ -85,7 +85,7 @@ impl Default for MapOptions {
 
 /// The input surface's sharp features and the fit of the boundary nodes to it
 /// (the polycube map and the fallback alike).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SurfaceOptions {
     /// Dihedral angle (degrees) above which an input edge is a sharp feature (default 40).
     pub feature_angle: f64,
@@ -110,7 +110,7 @@ impl Default for SurfaceOptions {
 }
 
 /// The quality steps after the mapping ([`super::quality`]), in their order.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QualityOptions {
     /// One pillow layer under the boundary (default true).
     pub pillow: bool,
@@ -221,7 +221,7 @@ impl Default for QualityOptions {
 }
 
 /// The grid-based fallback ([`super::voxel`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FallbackOptions {
     /// When no polycube candidate's mesh meets [`HexOptions::goals`] (with a fixed
     /// `map.level`: when every one keeps inverted elements), also mesh the input on a

@@ -17,10 +17,10 @@ use super::{apply_rows, check, Spline};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, SurfaceLocator};
 use crate::mesh::TriMesh;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Boundary fitting settings (part of `SplineOptions`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitOptions {
     /// Fit when a surface is given (default true).
     pub enabled: bool,

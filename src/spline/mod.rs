@@ -26,7 +26,7 @@ use crate::hex::HexMesh;
 use crate::mesh::TriMesh;
 use bernstein::NB;
 use nodes::{NodeKey, LMAX, R};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use topology::Topology;
 
@@ -34,7 +34,7 @@ pub use fit::{FitOptions, SurfaceDistance};
 pub use refine::{RefineOptions, RefineReport};
 
 /// How the spline is built. Every field has a documented default (see `Default`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SplineOptions {
     /// A boundary edge is sharp when the normals of its two boundary quads
     /// differ by more than this angle, in degrees (default 60); boundary edges of

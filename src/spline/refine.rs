@@ -25,11 +25,11 @@ use super::{BasisKind, Element, SparseOp, Spline};
 use crate::error::{Error, Result};
 use crate::geometry::SurfaceLocator;
 use crate::mesh::TriMesh;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::{HashMap, HashSet};
 
 /// Settings of automatic refinement (`Spline::refine_auto`, `SplineOptions::refine`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RefineOptions {
     /// Refine-and-fit passes (default 2).
     pub passes: usize,
