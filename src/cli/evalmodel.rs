@@ -54,6 +54,10 @@ pub struct EvalArgs {
     /// Sweep TCV's tau_CD and p over a grid instead (true vs wrong contexts accepted).
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: also print to stderr each candidate's per-cell PCD between its
+    /// output and its own laid-out input.
+    #[arg(long)]
+    pub sweep_fidelity: bool,
     /// TCV's coverage term without the template faces shared with occupied
     /// neighbours (VerifyOptions::visible_coverage; default: the library's).
     #[arg(long)]
@@ -110,7 +114,7 @@ pub fn run(a: &EvalArgs) -> Result<i32> {
     if a.sweep {
         let taus = [0.005, 0.0075, 0.01, 0.0125, 0.015, 0.0175, 0.02, 0.03, 0.05];
         let ps = [1.0, 2.0];
-        let (rows, gocc) = sddpm::search::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps)?;
+        let (rows, gocc) = sddpm::search::eval::tcv_sweep(&model, a.seed, a.cases, a.min, a.max, &opts, &taus, &ps, a.sweep_fidelity)?;
         println!("| tau_CD | p | true accepted | target nearest (cells) | wrong accepted |");
         println!("|---|---|---|---|---|");
         for r in &rows {

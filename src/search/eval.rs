@@ -222,12 +222,13 @@ fn gocc_sample(c: &Candidate, truth: bool) -> Option<GoccSample> {
 /// cases with their true context and with a wrong genus-consistent one, then count, for
 /// every pair of the grid, how many true contexts TCV accepts and how many wrong ones
 /// it accepts. GOCC failures and pre-check refusals are left out (TCV never sees them).
-/// With `SDDPM_SWEEP_FIDELITY` set, also prints to stderr each candidate's per-cell
+/// With `fidelity`, also prints to stderr each candidate's per-cell
 /// PCD between its output and its own laid-out input (grid units, tau 0.01, p 2),
 /// the output-against-input test measured in BENCHMARKS.md ("TCV threshold for the
 /// template-attention model"). Also returns GOCC's measurements on every diffused
 /// candidate, true and wrong.
-pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64]) -> Result<(Vec<SweepRow>, Vec<GoccSample>)> {
+#[allow(clippy::too_many_arguments)]
+pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opts: &PolycubeOptions, taus: &[f64], ps: &[f64], fidelity: bool) -> Result<(Vec<SweepRow>, Vec<GoccSample>)> {
     let mut gocc: Vec<GoccSample> = Vec::new();
     let synth = SyntheticOptions::default();
     let tpl = crate::search::verify::cached_templates(opts.verify.template_points);
@@ -249,10 +250,10 @@ pub fn tcv_sweep(model: &Model, seed: u64, n: usize, min: usize, max: usize, opt
                 .collect(),
         )
     };
-    // SDDPM_SWEEP_FIDELITY: each occupied cell's PCD between the output and its own
-    // laid-out input, printed as "max [per cell] stage" after `head` (and, for a
-    // wrong context, the value of its relabelled cell)
-    let show_fidelity = std::env::var_os("SDDPM_SWEEP_FIDELITY").is_some();
+    // `fidelity`: each occupied cell's PCD between the output and its own laid-out
+    // input, printed as "max [per cell] stage" after `head` (and, for a wrong
+    // context, the value of its relabelled cell)
+    let show_fidelity = fidelity;
     let print_fidelity = |head: String, c: &Candidate, changed: Option<usize>| {
         let cells: Vec<usize> = c.context.occupied().collect();
         // no values for a candidate the pre-check refused (it has no output)
