@@ -249,6 +249,12 @@ pub struct PolycubeResult {
     /// The generator that made the outputs: the learned weights' name, or
     /// "template" for the closed-form template estimate (`Model::generator_name`).
     pub generator: String,
+    /// The aligned input's surface samples ([`PreparedInput::samples`]) the
+    /// candidates were laid out from, kept so that a candidate refused before
+    /// layout can be laid out later (the main job's fallback order) without
+    /// aligning and sampling the input again.
+    #[serde(skip)]
+    pub samples: std::sync::Arc<Vec<SurfaceSample>>,
 }
 
 impl PolycubeResult {
@@ -733,7 +739,7 @@ pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cand
         .filter(|(_, c)| c.stage == Stage::Verified && c.output.is_some())
         .min_by(|a, b| a.1.score.unwrap_or(f64::INFINITY).total_cmp(&b.1.score.unwrap_or(f64::INFINITY)))
         .map(|(i, _)| i);
-    PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings, generator }
+    PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings, generator, samples: std::sync::Arc::new(input.samples) }
 }
 
 #[cfg(test)]
