@@ -5,6 +5,13 @@
 //!
 //! `cargo bench --bench generator -- [--seed 9100] [--cases 48] [--weights FILE] [--csv FILE]`
 //!
+//! Quality against training epochs, from the per-epoch snapshots a training run
+//! keeps (`epoch-N.sddpmw` in its checkpoint folder), on 24 cases per group of the
+//! same unseen seed: true contexts verified and relabelled contexts refused with the
+//! default sampler, and the label probe's ratio and cosine at t = 40 and 120:
+//! `cargo bench --bench generator -- --epochs CKPT_DIR --out docs/figures [--seed 9100]`
+//! (writes quality_vs_epoch.csv and quality_vs_epoch.png there).
+//!
 //! 1. The label probe (docs/history/diffusion.md, "The root cause"): e_A - e_B of
 //!    the model against the Bayes-optimal difference, ratio and cosine per t.
 //! 2. Per group (1-3 and 4-12 occupied cells): true contexts verified (GOCC + TCV,
@@ -37,9 +44,67 @@ fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
     args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).and_then(|v| v.parse().ok())
 }
 
+/// The quality-against-epoch curves of a checkpoint folder's snapshots.
+fn epochs(dir: &std::path::Path, out: &std::path::Path, seed: u64) {
+    use sddpm::export::plot::{line_png, Series};
+    let mut snaps: Vec<(usize, std::path::PathBuf)> = std::fs::read_dir(dir)
+        .expect("checkpoint folder")
+        .filter_map(|e| e.ok())
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().to_string();
+            let n = name.strip_prefix("epoch-")?.strip_suffix(".sddpmw")?.parse().ok()?;
+            Some((n, e.path()))
+        })
+        .collect();
+    snaps.sort();
+    let single = |l: &str| Context::parse(&format!("{l},0,0,0,0,0,0,0,0,0,0,0")).expect("label");
+    let mut csv = String::from("epoch,true_1_3,true_4_12,refused_1_3,refused_4_12,probe_ratio_t40,probe_cos_t40,probe_ratio_t120,probe_cos_t120\n");
+    let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); 8];
+    for (n, path) in &snaps {
+        let model = Model::from_file(path, Backend::Flex).expect("snapshot");
+        let opts = PolycubeOptions::default();
+        let a = generator_eval(&model, seed, 24, 1, 3, &opts).expect("evaluation");
+        let b = generator_eval(&model, seed, 24, 4, 12, &opts).expect("evaluation");
+        let mut probe = [0.0f64; 4];
+        let pairs = [("cube", "THC+Z"), ("BHC+Z", "cube"), ("THC+X", "THC+Z")];
+        for (x, y) in pairs {
+            let rows = label_probe(&model, &single(x), &single(y), &[40, 120], seed, 2, false).expect("probe");
+            for (i, r) in rows.iter().enumerate() {
+                probe[2 * i] += r.ratio / pairs.len() as f64;
+                probe[2 * i + 1] += r.cosine / pairs.len() as f64;
+            }
+        }
+        let v = [
+            a.true_verified as f64 / a.cases as f64,
+            b.true_verified as f64 / b.cases as f64,
+            a.wrong_refused as f64 / a.wrong_trials.max(1) as f64,
+            b.wrong_refused as f64 / b.wrong_trials.max(1) as f64,
+            probe[0],
+            probe[1],
+            probe[2],
+            probe[3],
+        ];
+        writeln!(csv, "{n},{}", v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(",")).unwrap();
+        println!("epoch {n}: {:?}", v.map(|x| (x * 1000.0).round() / 1000.0));
+        for (k, x) in v.iter().enumerate() {
+            series[k].push((*n as f64, *x));
+        }
+    }
+    std::fs::create_dir_all(out).expect("output folder");
+    std::fs::write(out.join("quality_vs_epoch.csv"), csv).expect("csv");
+    let names = ["true verified, 1-3 cells", "true verified, 4-12 cells", "relabelled refused, 1-3", "relabelled refused, 4-12", "probe ratio, t = 40", "probe cosine, t = 40", "probe ratio, t = 120", "probe cosine, t = 120"];
+    let s: Vec<Series> = names.iter().zip(&series).map(|(name, pts)| Series { name, points: pts.clone() }).collect();
+    line_png(&out.join("quality_vs_epoch.png"), &s, "Learned generator against training epochs (unseen seed)", "epoch", "share / ratio / cosine", false).expect("plot");
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let seed: u64 = arg(&args, "--seed").unwrap_or(9100);
+    if let Some(dir) = arg::<String>(&args, "--epochs") {
+        let out: String = arg(&args, "--out").unwrap_or_else(|| "docs/figures".into());
+        epochs(std::path::Path::new(&dir), std::path::Path::new(&out), seed);
+        return;
+    }
     let cases: usize = arg(&args, "--cases").unwrap_or(48);
     let weights: Option<String> = arg(&args, "--weights");
     let csv: Option<String> = arg(&args, "--csv");
