@@ -76,6 +76,50 @@ pub fn edges(m: &HexMesh) -> Vec<[u32; 2]> {
     v
 }
 
+/// Edges where the mesh is not a regular grid, which is where a TH-spline on it is
+/// only C0: interior edges shared by other than four elements, and boundary edges
+/// (on a boundary quad) shared by other than two.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct IrregularEdges {
+    pub interior: usize,
+    pub boundary: usize,
+}
+
+impl IrregularEdges {
+    pub fn total(&self) -> usize {
+        self.interior + self.boundary
+    }
+}
+
+/// Count the irregular edges of a mesh (see [`IrregularEdges`]); an edge is on the
+/// boundary when a boundary quad has it.
+pub fn irregular_edges(m: &HexMesh) -> IrregularEdges {
+    let key = |a: u32, b: u32| if a < b { [a, b] } else { [b, a] };
+    let mut valence: HashMap<[u32; 2], u32> = HashMap::with_capacity(m.elements.len() * 3);
+    for el in &m.elements {
+        for e in HEX_EDGES {
+            *valence.entry(key(el[e[0]], el[e[1]])).or_insert(0) += 1;
+        }
+    }
+    let mut on_boundary: std::collections::HashSet<[u32; 2]> = std::collections::HashSet::new();
+    if let Ok(quads) = boundary_quads(m) {
+        for q in quads {
+            for i in 0..4 {
+                on_boundary.insert(key(q.nodes[i], q.nodes[(i + 1) % 4]));
+            }
+        }
+    }
+    let mut out = IrregularEdges::default();
+    for (e, v) in valence {
+        if on_boundary.contains(&e) {
+            out.boundary += (v != 2) as usize;
+        } else {
+            out.interior += (v != 4) as usize;
+        }
+    }
+    out
+}
+
 /// Compressed adjacency lists (CSR): `start[i]..start[i+1]` indexes `list`.
 #[derive(Debug, Clone, Default)]
 pub struct Csr {
@@ -171,5 +215,50 @@ mod tests {
             assert!(n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0);
         }
         assert_eq!(edges(&m).len(), 12);
+    }
+
+    /// An n x n x n grid of unit hexes.
+    fn grid(n: usize) -> HexMesh {
+        let id = |i: usize, j: usize, k: usize| (i + (n + 1) * (j + (n + 1) * k)) as u32;
+        let mut nodes = Vec::new();
+        for k in 0..=n {
+            for j in 0..=n {
+                for i in 0..=n {
+                    nodes.push([i as f64, j as f64, k as f64]);
+                }
+            }
+        }
+        let mut elements = Vec::new();
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    elements.push([id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k), id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)]);
+                }
+            }
+        }
+        HexMesh { nodes, elements }
+    }
+
+    #[test]
+    fn a_grid_is_irregular_only_along_the_box_edges() {
+        for n in [1, 2, 4] {
+            let r = irregular_edges(&grid(n));
+            // the twelve box edges' n segments each lie on one element
+            assert_eq!(r, IrregularEdges { interior: 0, boundary: 12 * n }, "n = {n}");
+        }
+        // an L of three grids' worth: the re-entrant edge lies on three elements
+        let mut m = grid(2);
+        m.elements.retain(|el| {
+            let c = el.iter().fold([0.0; 3], |a, &v| {
+                let p = m.nodes[v as usize];
+                [a[0] + p[0] / 8.0, a[1] + p[1] / 8.0, a[2] + p[2] / 8.0]
+            });
+            !(c[0] > 1.0 && c[1] > 1.0)
+        });
+        let r = irregular_edges(&m);
+        // vertical: the plan's five convex corners (valence 1) and its re-entrant
+        // corner (valence 3), two segments each; horizontal: the plan's 8-unit outline
+        // on the top and the bottom face (valence 1); the rest lie on two or four
+        assert_eq!(r, IrregularEdges { interior: 0, boundary: 5 * 2 + 2 + 2 * 8 });
     }
 }
