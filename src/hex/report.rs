@@ -170,6 +170,7 @@ impl HexResult {
 /// min_scaled_jacobian, mean_scaled_jacobian, inverted, hausdorff_relative, file)
 /// and more: level, histogram, volumes, per-level and per-stage reports.
 pub fn report_json(r: &HexResult) -> serde_json::Value {
+    let irregular = super::topology::irregular_edges(&r.mesh);
     serde_json::json!({
         "vertices": r.mesh.nodes.len(),
         "elements": r.mesh.elements.len(),
@@ -177,6 +178,11 @@ pub fn report_json(r: &HexResult) -> serde_json::Value {
         "mean_scaled_jacobian": r.quality.mean,
         "inverted": r.quality.inverted,
         "hausdorff_relative": r.hausdorff_relative,
+        // interior edges on other than four elements plus boundary edges on other
+        // than two: where the spline is only C0
+        "irregular_edges": irregular.total(),
+        "irregular_edges_interior": irregular.interior,
+        "irregular_edges_boundary": irregular.boundary,
         "file": HEX_VTU,
         "files": [HEX_VTU, HEX_VTK, HEX_MESH, HEX_K],
         "level": r.level,
