@@ -351,9 +351,9 @@ fn bayes_eps(draws: &[Vec<f32>], xt: &[f32], n: usize, sa: f64, sd: f64, shift: 
             draws.iter().map(|d| std::array::from_fn(|ch| d[flat(ch, r, c)] as f64)).collect()
         })
         .collect();
-    // 32 draws pooled: 16,384 points, about 0.02 cell units apart on a cell's
-    // surface, under the noise of every probed t >= 20 (0.05 cell units and up)
-    let pooled: Vec<[f64; 3]> = if rank { Vec::new() } else { pts.iter().flat_map(|v| v.iter().take(32)).copied().collect() };
+    // 96 draws pooled: 49,152 points, about 0.011 cell units apart on a cell's
+    // surface, a fifth of the noise at t = 20 (0.05 cell units for one cell)
+    let pooled: Vec<[f64; 3]> = if rank { Vec::new() } else { pts.iter().flat_map(|v| v.iter().take(96)).copied().collect() };
     let mut out = Vec::with_capacity(POINTS_PER_CELL * 3);
     for p in 0..POINTS_PER_CELL {
         let (r, c) = slot(n, p);
