@@ -1,0 +1,268 @@
+//! The automated mode: genus-guided context generation.
+//!
+//! 1. The temporary volume of the aligned input ([`crate::geometry::voxel`]), split
+//!    into subregions ([`volume::subregions`]), each with its genus.
+//! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
+//!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
+//!    aligned bounding box into subregions, measure each one's genus, and take its
+//!    feasible labels (empty -> null; genus 0 -> cube, the six BHC and the three THC; genus 1 ->
+//!    the three THC; genus >= 2 -> the box cannot hold the input).
+//! 3. Local stage: each subregion's feasible labels are ranked by their fit in the
+//!    box (the input against the box's assembly with that label in the cell and
+//!    cubes elsewhere, the cell's own term: [`rank::in_context_fits`]); the best labels
+//!    are diffused as single cells on the subregion's surface (the input's samples
+//!    inside it plus samples on the faces where the subregion is cut out of the
+//!    solid) and verified (GOCC + TCV), all in one batch.
+//! 4. Global stage: products of the kept labels whose assembly is valid and has the
+//!    input's genus are ranked by geometric fit averaged over their cells; the best
+//!    ones pass the occupancy pre-check, are diffused in one batch and verified (a
+//!    failing one a second time with the visible prior); the verified candidate
+//!    with the lowest mean cell fit is chosen.
+//!
+//! By concern: the temporary volume and its subregions ([`volume`]); each box's
+//! subregions, feasible labels and candidate assemblies ([`boxes`]); the fits that
+//! rank labels, candidates and boxes ([`rank`]); the local stage (`local.rs`); the
+//! boxes tried in order with the global stage (`global.rs`).
+
+pub mod boxes;
+mod global;
+mod local;
+pub mod rank;
+pub mod volume;
+
+use super::generate::{finish, prepare_input, OrientationSearch, PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, FIT_SAMPLES};
+use crate::diffusion::Model;
+use crate::error::{check_progress, Error, Progress, Result};
+use crate::geometry::SurfaceSample;
+use crate::mesh::TriMesh;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+use volume::{Subregion, TemporaryVolume};
+
+/// Splitting ratios: fractions of the aligned bounding box along X (up to 3 parts),
+/// Y (up to 2) and Z (up to 2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SplitRatios {
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub z: Vec<f64>,
+}
+
+impl SplitRatios {
+    pub fn equal(nx: usize, ny: usize, nz: usize) -> Self {
+        SplitRatios { x: vec![1.0; nx], y: vec![1.0; ny], z: vec![1.0; nz] }
+    }
+
+    /// Parse "X1,X2,X3:Y1,Y2:Z1,Z2".
+    pub fn parse(s: &str) -> Result<Self> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let bad = || Error::InvalidArgument(format!("splitting ratios are X1[,X2[,X3]]:Y1[,Y2]:Z1[,Z2] (positive numbers), got '{s}'"));
+        if parts.len() != 3 {
+            return Err(bad());
+        }
+        let axis = |t: &str, max: usize| -> Result<Vec<f64>> {
+            let v: Vec<f64> = t.split(',').map(|x| x.trim().parse::<f64>().map_err(|_| bad())).collect::<Result<_>>()?;
+            if v.is_empty() || v.len() > max || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(bad());
+            }
+            Ok(v)
+        };
+        Ok(SplitRatios { x: axis(parts[0], 3)?, y: axis(parts[1], 2)?, z: axis(parts[2], 2)? })
+    }
+
+    pub fn dims(&self) -> [usize; 3] {
+        [self.x.len(), self.y.len(), self.z.len()]
+    }
+}
+
+/// Options of the automated mode, with documented defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AutoOptions {
+    /// Voxels along the longest edge of the temporary volume (default 48).
+    pub resolution: usize,
+    /// A subregion filled less than this is empty (null) (default 0.04).
+    pub min_fill: f64,
+    /// A subregion filled less than this may also be null (default 0.15): the
+    /// global stage tries both (a warped part bulges a few percent into a cell its
+    /// polycube leaves empty; an occupied cell is filled 0.6 or more, a through hole
+    /// included).
+    pub null_fill: f64,
+    /// Labels kept per subregion after the local fit (default 3).
+    pub local_keep: usize,
+    /// Run the local single-cell diffusion + verification (default true).
+    pub local_diffusion: bool,
+    /// Global candidates diffused at most (best geometric fit first; default 16).
+    pub max_global: usize,
+    /// A finer box is preferred only when its fit beats the coarsest acceptable box's
+    /// by this factor (default 0.8).
+    pub finer_box_factor: f64,
+    /// Boxes tried (best first) before giving up (default 2); a box none of whose
+    /// candidates passes the pre-check and the fit limit is passed over and not
+    /// counted.
+    pub max_boxes: usize,
+    /// Sampler steps of the local single-cell diffusion (default 25).
+    pub local_steps: usize,
+    /// Also choose the subregions' labels jointly on the global fit (coordinate
+    /// descent over the cells, every feasible label, from the local ranking; see
+    /// [`rank::joint_labels`]) and add the valid assemblies of the input's genus it visits
+    /// to the box's candidates (default false: measured in BENCHMARKS.md "Context
+    /// search", not yet on the real meshes).
+    pub joint_labels: bool,
+}
+
+impl Default for AutoOptions {
+    fn default() -> Self {
+        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false }
+    }
+}
+
+/// The local stage's record of one subregion.
+#[derive(Debug, Clone, Serialize)]
+pub struct LocalResult {
+    pub subregion: Subregion,
+    /// (label, in-context geometric fit, see [`rank::in_context_fits`]) of every feasible
+    /// label, best first.
+    pub fits: Vec<(String, f64)>,
+    /// Labels that went on to the global stage.
+    pub kept: Vec<String>,
+    /// Labels that passed local verification.
+    pub verified: Vec<String>,
+}
+
+/// The record of one occupied box.
+#[derive(Debug, Clone, Serialize)]
+pub struct BoxResult {
+    pub dims: [usize; 3],
+    pub ratios: SplitRatios,
+    pub locals: Vec<LocalResult>,
+    /// Global candidates with the input's genus (before the cap).
+    pub candidates: usize,
+    /// Best global geometric fit (squared cell units of this box).
+    pub best_fit: Option<f64>,
+    /// The same candidate's fit in squared units of a common length (the cell of a
+    /// 12-cell split of the part's bounding box by volume), which ranks the boxes:
+    /// see [`rank::box_scale`].
+    pub best_fit_common: Option<f64>,
+    /// Candidates added by the joint label search (`AutoOptions::joint_labels`).
+    pub joint_candidates: usize,
+    /// Why this box cannot hold the input, if it cannot.
+    pub refused: Option<String>,
+}
+
+/// What the automated mode measured beyond the candidates.
+#[derive(Debug, Clone, Serialize)]
+pub struct AutoReport {
+    /// Voxels along the longest side of the temporary volume (`AutoOptions::resolution`,
+    /// doubled while the volume misses the surface's, see [`volume::VOLUME_TOLERANCE`]).
+    pub resolution: usize,
+    pub volume_tetrahedra: usize,
+    pub volume: f64,
+    pub surface_volume: f64,
+    pub volume_relative_error: f64,
+    pub boxes: Vec<BoxResult>,
+    pub chosen_box: Option<[usize; 3]>,
+}
+
+/// What every step of one automated run reads.
+struct Run<'a> {
+    input: &'a PreparedInput,
+    volume: &'a TemporaryVolume,
+    /// The input's samples the fits use (the first [`FIT_SAMPLES`]).
+    fit_sub: &'a [SurfaceSample],
+    /// The input's genus.
+    genus: i64,
+    opts: &'a PolycubeOptions,
+    aopts: &'a AutoOptions,
+    /// The options of the global stage: `opts` in the input's frame only.
+    global: PolycubeOptions,
+}
+
+/// Run the automated mode (all boxes, or the full grid split by `ratios`).
+pub fn generate_auto(
+    model: &Model,
+    mesh: &TriMesh,
+    input_genus: i64,
+    ratios: Option<&SplitRatios>,
+    opts: &PolycubeOptions,
+    aopts: &AutoOptions,
+    progress: &mut dyn Progress,
+) -> Result<(PolycubeResult, AutoReport)> {
+    let t_all = Instant::now();
+    let mut timings = PolycubeTimings::default();
+    let t0 = Instant::now();
+    let input = prepare_input(mesh, opts)?;
+    timings.align = t0.elapsed().as_secs_f64();
+    check_progress(progress, 0.02, "temporary volume")?;
+    let volume = volume::measure(&input, aopts)?;
+    let mut report = AutoReport::of_volume(&volume);
+    let mut global_opts = opts.clone();
+    global_opts.orientations = OrientationSearch::Identity;
+    let run = Run { input: &input, volume: &volume, fit_sub: &input.samples[..input.samples.len().min(FIT_SAMPLES)], genus: input_genus, opts, aopts, global: global_opts };
+    let t0 = Instant::now();
+    let mut boxes = boxes::analyse_boxes(&run, &boxes::box_shapes(ratios), &mut report, progress)?;
+    timings.precheck += t0.elapsed().as_secs_f64();
+    check_progress(progress, 0.3, "global candidates")?;
+    rank::rank_candidates(&run, &mut boxes, &mut report);
+    let order = rank::box_order(&run, &boxes, &report)?;
+    let candidates = global::try_boxes(&run, model, &mut boxes, &order, &mut report, progress, &mut timings)?;
+    timings.total = t_all.elapsed().as_secs_f64();
+    let result = finish(input, input_genus, "auto", candidates, timings, model.generator_name(opts.sampler.kernel_gate));
+    Ok((result, report))
+}
+
+impl AutoReport {
+    /// The report of a run on `volume`, before any box.
+    fn of_volume(volume: &TemporaryVolume) -> AutoReport {
+        let (vol, surface_volume) = (&volume.vol, volume.surface_volume);
+        AutoReport {
+            resolution: volume.resolution,
+            volume_tetrahedra: vol.tetrahedra(),
+            volume: vol.volume(),
+            surface_volume,
+            volume_relative_error: (vol.volume() - surface_volume).abs() / surface_volume.max(1e-300),
+            boxes: Vec::new(),
+            chosen_box: None,
+        }
+    }
+}
+
+/// The error of an automated run in which no global candidate passed: names the
+/// subregions whose local verification failed and suggests ratios.
+pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Error> {
+    if result.chosen.is_some() {
+        return None;
+    }
+    let Some(b) = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box) else {
+        // no box was tried: every box was refused or passed over
+        // boxes that had candidates (passed over on the fit limit) first
+        let mut boxes: Vec<&BoxResult> = report.boxes.iter().filter(|b| b.refused.is_some()).collect();
+        boxes.sort_by_key(|b| b.candidates == 0);
+        let mut why: Vec<String> = boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
+        why.truncate(6);
+        return Some(Error::VerificationFailed(format!(
+            "automated mode diffused no candidate: no occupied box has one that passes the occupancy pre-check and the fit limit ({}); the part may not be a polycube of the 3x2x2 grid, or try splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2)",
+            why.join("; ")
+        )));
+    };
+    let failed: Vec<String> = b
+        .locals
+        .iter()
+        .filter(|l| !l.subregion.empty && l.verified.is_empty())
+        .map(|l| format!("cell {} (genus {}, best fit {})", l.subregion.cell, l.subregion.genus, l.fits.first().map(|f| f.0.as_str()).unwrap_or("-")))
+        .collect();
+    let base = match result.accepted() {
+        Err(Error::VerificationFailed(m)) => m,
+        _ => String::new(),
+    };
+    Some(Error::VerificationFailed(format!(
+        "{base}; box {}x{}x{}: {}; try other splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2) that put each hole in its own cell",
+        b.dims[0],
+        b.dims[1],
+        b.dims[2],
+        if failed.is_empty() { "every subregion passed local verification".to_string() } else { format!("local verification failed in {}", failed.join(", ")) }
+    )))
+}
+
+#[cfg(test)]
+mod tests;
