@@ -25,7 +25,9 @@ jobs=$(nproc 2>/dev/null || echo 2)
 echo "== cargo test --release"
 # report.html is checked in headless Chromium (installed above): do not skip it here
 export SDDPM_REQUIRE_CHROMIUM=1
-cargo test --release
+# with the test-only C exports, as the CMake build of the C++ tests below builds the
+# library (cargo feature test-hooks), so that it reuses this build
+cargo test --release --features test-hooks
 
 echo "== cmake configure + build (build/)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release

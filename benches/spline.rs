@@ -13,9 +13,13 @@ use sddpm::export::vtk::read_vtk_legacy;
 use sddpm::hex::HexMesh;
 use sddpm::mesh::TriMesh;
 use sddpm::spline::iga::{solve_poisson, PoissonOptions};
-use sddpm::spline::{build_spline, check, meshes, FitOptions, RefineOptions, Spline, SplineOptions};
+use sddpm::spline::{build_spline, check, FitOptions, RefineOptions, Spline, SplineOptions};
+
 use std::path::Path;
 use std::time::Instant;
+
+#[path = "../tests/support/meshes.rs"]
+mod meshes;
 
 const MODELS: [&str; 4] = ["hepta", "joint", "rockerarm", "rod"];
 

@@ -8,7 +8,8 @@
 
 #include "common.hpp"
 
-// Test-only export, deliberately left out of the public header.
+// Test-only export, deliberately left out of the public header (the library CMake
+// builds for the tests has it: cargo feature test-hooks).
 extern "C" sddpm_status sddpm_test_force_panic(void);
 
 using namespace sddpm_test;
@@ -110,6 +111,69 @@ TEST(Abi, LastErrorIsPerThread) {
   t.join();
   EXPECT_EQ(other, SDDPM_STATUS_INTERNAL);
   EXPECT_EQ(sddpm_last_error_status(), SDDPM_STATUS_OK);
+}
+
+// The options handle: every type set and read back, refusals naming the option,
+// the description with the buffer convention, NULL handles.
+TEST(Abi, OptionsHandle) {
+  sddpm_options* o = nullptr;
+  ASSERT_EQ(sddpm_options_new(&o), SDDPM_STATUS_OK);
+  EXPECT_EQ(sddpm_options_set_number(o, "hex.goals.hausdorff", 0.02), SDDPM_STATUS_OK);
+  EXPECT_EQ(sddpm_options_set_number(o, "hex.map.level", 2), SDDPM_STATUS_OK);
+  EXPECT_EQ(sddpm_options_set_bool(o, "hex.quality.pillow", false), SDDPM_STATUS_OK);
+  EXPECT_EQ(sddpm_options_set_string(o, "polycube.orientations", "Identity"), SDDPM_STATUS_OK);
+  double x = 0;
+  EXPECT_EQ(sddpm_options_get_number(o, "hex.goals.hausdorff", &x), SDDPM_STATUS_OK);
+  EXPECT_EQ(x, 0.02);
+  EXPECT_EQ(sddpm_options_get_number(o, "hex.map.level", &x), SDDPM_STATUS_OK);
+  EXPECT_EQ(x, 2.0);
+  bool b = true;
+  EXPECT_EQ(sddpm_options_get_bool(o, "hex.quality.pillow", &b), SDDPM_STATUS_OK);
+  EXPECT_FALSE(b);
+  char small[4] = {'x', 'x', 'x', 'x'};
+  size_t need = 0;
+  EXPECT_EQ(sddpm_options_get_string(o, "polycube.orientations", small, sizeof small, &need), SDDPM_STATUS_BUFFER_TOO_SMALL);
+  EXPECT_EQ(need, 9u);
+  EXPECT_EQ(small[0], 'x');
+  std::string str(need, '\0');
+  EXPECT_EQ(sddpm_options_get_string(o, "polycube.orientations", str.data(), str.size(), nullptr), SDDPM_STATUS_OK);
+  EXPECT_STREQ(str.c_str(), "Identity");
+  // back to the automatic level
+  EXPECT_EQ(sddpm_options_unset(o, "hex.map.level"), SDDPM_STATUS_OK);
+  EXPECT_EQ(sddpm_options_get_number(o, "hex.map.level", &x), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("hex.map.level is unset"), std::string::npos) << last_error();
+
+  // refusals name the option and leave the value as it was
+  EXPECT_EQ(sddpm_options_set_bool(o, "hex.quality.pilow", true), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("unknown option \"hex.quality.pilow\""), std::string::npos) << last_error();
+  EXPECT_EQ(sddpm_options_set_number(o, "hex.goals.hausdorff", -1.0), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("option hex.goals.hausdorff must be"), std::string::npos) << last_error();
+  EXPECT_EQ(sddpm_options_set_number(o, "hex.quality.pillow", 1.0), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("option hex.quality.pillow is a bool option"), std::string::npos) << last_error();
+  EXPECT_EQ(sddpm_options_set_string(o, "polycube.orientations", "sideways"), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("option polycube.orientations"), std::string::npos) << last_error();
+  EXPECT_EQ(sddpm_options_set_number(o, "hex_candidates", 0), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_NE(last_error().find("option hex_candidates must be at least 1"), std::string::npos) << last_error();
+  EXPECT_EQ(sddpm_options_get_number(o, "hex.goals.hausdorff", &x), SDDPM_STATUS_OK);
+  EXPECT_EQ(x, 0.02);
+
+  // the description: every option with its value, default, type and documentation
+  EXPECT_EQ(sddpm_options_describe_json(o, nullptr, 0, &need), SDDPM_STATUS_BUFFER_TOO_SMALL);
+  std::string d(need, '\0');
+  ASSERT_EQ(sddpm_options_describe_json(o, d.data(), d.size(), &need), SDDPM_STATUS_OK);
+  d.resize(need - 1);
+  EXPECT_EQ(d.front(), '{');
+  EXPECT_NE(d.find("\"hex.goals.hausdorff\":{\"default\":0.01,"), std::string::npos) << d.substr(0, 200);
+  EXPECT_NE(d.find("\"value\":0.02"), std::string::npos);
+  size_t docs = 0;
+  for (size_t at = d.find("\"doc\":"); at != std::string::npos; at = d.find("\"doc\":", at + 1)) ++docs;
+  EXPECT_GT(docs, 90u);
+
+  EXPECT_EQ(sddpm_options_set_number(nullptr, "hex.map.level", 1), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(sddpm_options_set_number(o, nullptr, 1), SDDPM_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(sddpm_options_new(nullptr), SDDPM_STATUS_INVALID_ARGUMENT);
+  sddpm_options_free(o);
+  sddpm_options_free(nullptr);  // no-op
 }
 
 TEST(Abi, ArraysWithNaNAndBadIndices) {

@@ -14,9 +14,9 @@
 namespace {
 std::string mesh(const std::string& name) { return std::string(SDDPM_TEST_DATA) + "/" + name; }
 
-sddpm_polycube_options fast() {
-  auto o = sddpm::default_polycube_options();
-  o.sampler_steps = 10;
+sddpm::Options fast() {
+  sddpm::Options o;
+  o.set("polycube.sampler.steps", 10);
   return o;
 }
 }  // namespace
@@ -76,13 +76,53 @@ TEST(CppApi, MeshContextsAndErrors) {
   for (size_t i = 0; i < all.size(); ++i) EXPECT_EQ(all.genus(i), 0);
 }
 
+// Options by name: set and read back each type, refusals naming the option, the description.
+TEST(CppApi, Options) {
+  sddpm::Options o;
+  EXPECT_TRUE(o.get_bool("hex.quality.pillow"));
+  o.set("hex.quality.pillow", false).set("hex.goals.hausdorff", 0.02).set("hex_candidates", 2).set("polycube.orientations", "SignFlips");
+  o.set("polycube.seed", static_cast<uint64_t>(7));
+  EXPECT_FALSE(o.get_bool("hex.quality.pillow"));
+  EXPECT_DOUBLE_EQ(o.get_number("hex.goals.hausdorff"), 0.02);
+  EXPECT_EQ(o.get_number("hex_candidates"), 2.0);
+  EXPECT_EQ(o.get_number("polycube.seed"), 7.0);
+  EXPECT_EQ(o.get_string("polycube.orientations"), "SignFlips");
+  o.set("hex.map.level", 3);
+  EXPECT_EQ(o.get_number("hex.map.level"), 3.0);
+  o.unset("hex.map.level");
+  EXPECT_THROW(o.get_number("hex.map.level"), sddpm::Error);
+  try {
+    o.set("hex.quality.pilow", true);
+    FAIL() << "unknown option accepted";
+  } catch (const sddpm::Error& e) {
+    EXPECT_EQ(e.status(), SDDPM_STATUS_INVALID_ARGUMENT);
+    EXPECT_NE(e.message().find("unknown option \"hex.quality.pilow\""), std::string::npos) << e.message();
+  }
+  try {
+    o.set("hex.fallback.resolution", 1);
+    FAIL() << "resolution 1 accepted";
+  } catch (const sddpm::Error& e) {
+    EXPECT_EQ(e.status(), SDDPM_STATUS_INVALID_ARGUMENT);
+    EXPECT_NE(e.message().find("option hex.fallback.resolution must be between 2 and 192, got 1"), std::string::npos) << e.message();
+  }
+  EXPECT_THROW(o.set("hex.quality.pillow", 1.0), sddpm::Error);  // a bool option
+  EXPECT_FALSE(o.get_bool("hex.quality.pillow"));                // unchanged by the refusals
+  auto d = o.describe_json();
+  for (auto name : {"polycube.sampler.steps", "polycube.verify.tau_cd", "auto.resolution", "hex.map.level", "hex.quality.pillow",
+                    "hex.fallback.enabled", "hex.goals.hausdorff", "spline.fit.enabled", "hex_candidates", "accept_unverified"}) {
+    EXPECT_NE(d.find(std::string("\"") + name + "\":{"), std::string::npos) << name;
+  }
+  static_assert(!std::is_copy_constructible_v<sddpm::Options>, "options are move-only");
+}
+
 TEST(CppApi, PolycubeProgressAndCancel) {
   auto model = sddpm::Model::embedded();
   EXPECT_GT(model.info().parameters, 0u);
   auto m = sddpm::Mesh::load(mesh("cgal_hole.off"));
   auto ctx = sddpm::Contexts::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0");
+  const auto opts = fast();
   int calls = 0;
-  auto pc = sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast(), [&](double f, const std::string&) {
+  auto pc = sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, &opts, [&](double f, const std::string&) {
     EXPECT_GE(f, 0.0);
     EXPECT_LE(f, 1.0);
     ++calls;
@@ -104,7 +144,7 @@ TEST(CppApi, PolycubeProgressAndCancel) {
   // genus mismatch is refused before diffusion
   auto cube = sddpm::Contexts::parse("cube,0,0,0,0,0,0,0,0,0,0,0");
   try {
-    sddpm::Polycube::generate(model, m, {&cube, nullptr, nullptr}, fast());
+    sddpm::Polycube::generate(model, m, {&cube, nullptr, nullptr}, &opts);
     FAIL() << "genus mismatch accepted";
   } catch (const sddpm::Error& e) {
     EXPECT_EQ(e.status(), SDDPM_STATUS_GENUS_MISMATCH);
@@ -112,14 +152,14 @@ TEST(CppApi, PolycubeProgressAndCancel) {
   }
   // cancel from the callback
   try {
-    sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast(), [](double, const std::string&) { return false; });
+    sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, &opts, [](double, const std::string&) { return false; });
     FAIL() << "not cancelled";
   } catch (const sddpm::Error& e) {
     EXPECT_EQ(e.status(), SDDPM_STATUS_CANCELLED);
   }
   // an exception in the callback cancels the call and reaches the caller
   struct Stop {};
-  EXPECT_THROW(sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast(), [](double, const std::string&) -> bool { throw Stop{}; }), Stop);
+  EXPECT_THROW(sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, &opts, [](double, const std::string&) -> bool { throw Stop{}; }), Stop);
 }
 
 // The whole pipeline through the C++ layer: mesh -> polycube -> hex mesh -> spline -> files.
@@ -127,10 +167,10 @@ TEST(CppApi, WholePipeline) {
   auto model = sddpm::Model::embedded();
   auto m = sddpm::Mesh::load(mesh("cgal_hole.off"));
   auto ctx = sddpm::Contexts::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0");
-  auto pc = sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, fast());
-  auto ho = sddpm::default_hex_options();
-  ho.level = 1;
-  auto hex = sddpm::HexMesh::build(pc, ho);
+  auto opts = fast();
+  auto pc = sddpm::Polycube::generate(model, m, {&ctx, nullptr, nullptr}, &opts);
+  opts.set("hex.map.level", 1);
+  auto hex = sddpm::HexMesh::build(pc, &opts);
   auto q = hex.quality();
   EXPECT_EQ(q.elements, hex.element_count());
   EXPECT_EQ(q.inverted, 0u);

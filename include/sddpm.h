@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 /* Version of the C ABI this header declares; compare with sddpm_abi_version(). */
-#define SDDPM_ABI_VERSION 4
+#define SDDPM_ABI_VERSION 5
 
 // Fixed status numbers (mirrored by `sddpm_status` in include/sddpm.h).
 enum sddpm_status
@@ -118,6 +118,13 @@ typedef struct sddpm_mesh sddpm_mesh;
 // several threads at once).
 typedef struct sddpm_model sddpm_model;
 
+// An opaque set of options (create with sddpm_options_new, release with
+// sddpm_options_free), given to sddpm_generate_polycube, sddpm_hex_mesh_build and
+// sddpm_spline_build (NULL there: the defaults). Each call reads the options it
+// needs when it is made. Setters are not thread-safe on one handle; reads (the
+// getters, describe, the build calls) may come from several threads at once.
+typedef struct sddpm_options sddpm_options;
+
 // The result of polycube generation (release with sddpm_polycube_free). Immutable
 // once created: read calls and sddpm_hex_mesh_build may come from several threads
 // at once; freeing it while another thread uses it is not allowed.
@@ -138,66 +145,6 @@ typedef struct sddpm_constraints {
   uint16_t required_mask;
   int64_t genus;
 } sddpm_constraints;
-
-// Options of the hex stage; fill with sddpm_hex_options_default, then change fields.
-typedef struct sddpm_hex_options {
-  // Fixed octree level, or -1 to choose it by the stopping rule (default -1).
-  int32_t level;
-  // Smallest and largest level the stopping rule may choose (defaults 2 and 4).
-  uint32_t min_level;
-  uint32_t max_level;
-  // Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
-  double threshold;
-  // Most elements before pillowing (default 200000): caps the automatic level (not
-  // below min_level) and the fallback's lattices.
-  size_t max_elements;
-  // Dihedral angle in degrees above which an input edge is a feature (default 40).
-  double feature_angle;
-  // One pillow layer (default true).
-  bool pillow;
-  // Smoothing passes (default 20) and Jacobian-optimisation passes (default 30).
-  uint32_t smooth_iterations;
-  uint32_t optimise_passes;
-  // Optimisation works on elements below this scaled Jacobian (default 0.8).
-  double optimise_target;
-  // Candidates meshed (verified ones, else diffused ones by fit); the best mesh is kept (default 4).
-  uint32_t hex_candidates;
-  // Mesh the best-fitting diffused candidate when none passed verification (default true).
-  bool accept_unverified;
-  // When no candidate's mesh meets the goals below (with a fixed level: when every
-  // one keeps inverted elements), also mesh the input on a voxel lattice and keep
-  // that mesh when it ranks better (default true; the quality then reports
-  // `verified_polycube` false).
-  bool voxel_fallback;
-  // Voxels along the longest bounding-box edge of the fallback's first lattice
-  // (default 24; doubled while its topology is wrong, refined while it misses the goals).
-  uint32_t voxel_resolution;
-  // Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
-  // two-sided Hausdorff distance to the input over the bounding-box diagonal
-  // (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
-  // how far they miss them (sum of the relative misses), then minimum scaled Jacobian.
-  double goal_min_scaled_jacobian;
-  double goal_mean_scaled_jacobian;
-  double goal_hausdorff;
-  // How many finer lattices the fallback may try after its first (default 2; 0:
-  // the first lattice only).
-  uint32_t voxel_refinements;
-  // Coverage step: input vertices farther than this fraction of the Hausdorff goal
-  // from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
-  // measured).
-  double pin_uncovered;
-  // Sharp-edge capture steps (after smoothing and after the optimisation):
-  // boundary nodes near the input's sharp edges go onto them (default true).
-  bool capture_features;
-  // Local refinement rounds of the fallback: the voxels around the points
-  // farthest from its mesh split 3 x 3 x 3 with conforming transition elements
-  // (default 0: off). ABI 3.
-  uint32_t local_refinement;
-  // Feature sheets on the fallback's lattice meshes: a sheet of elements under
-  // each surface patch, the nodes between patches onto the input's sharp curves
-  // (default true; docs/hex.md "Feature sheets"). ABI 4.
-  bool feature_sheets;
-} sddpm_hex_options;
 
 // Progress callback for long calls: `fraction` in [0, 1], `stage` a short
 // NUL-terminated name valid during the call, `user_data` as given by the
@@ -278,27 +225,6 @@ typedef struct sddpm_model_info {
   double final_loss;
 } sddpm_model_info;
 
-// Options of polycube generation; fill with sddpm_polycube_options_default.
-typedef struct sddpm_polycube_options {
-  // Seed of sampling and diffusion (default 0).
-  uint64_t seed;
-  // Reverse-diffusion steps: 0 = the full T-step sampler, n = strided (default: library default).
-  uint32_t sampler_steps;
-  // 0 = frame as aligned, 1 = also its sign flips, 2 = all 24 grid rotations (default 2).
-  uint32_t orientations;
-  // TCV threshold tau_CD, squared cell units (default 0.015).
-  double tau_cd;
-  // Occupancy pre-check: most surface allowed in empty cells (default 0.03).
-  double max_in_empty_fraction;
-  // Geometric pre-check: largest fit score diffused (default 0.05).
-  double max_fit;
-  // Automated mode: voxels along the longest edge of the temporary volume (default 48).
-  uint32_t auto_resolution;
-  // User-guided pre-check: refuse a context when relabelling one of its cells fits
-  // the input this many times better (default 1.5; 0 turns the test off).
-  double neighbour_fit_ratio;
-} sddpm_polycube_options;
-
 // What the verification measured for one candidate.
 typedef struct sddpm_candidate_report {
   int32_t labels[12];
@@ -314,23 +240,6 @@ typedef struct sddpm_candidate_report {
   double score;
   bool chosen;
 } sddpm_candidate_report;
-
-// Options of the spline stage; fill with sddpm_spline_options_default.
-typedef struct sddpm_spline_options {
-  // Boundary edges sharper than this dihedral angle (degrees) are sharp features
-  // (default 60); negative turns automatic detection off.
-  double sharp_angle_deg;
-  // C0 Bernstein functions on the two layers next to the boundary (default false).
-  bool boundary_enrichment;
-  // Control points chosen so the spline interpolates the control-mesh vertices (default false).
-  bool interpolate_vertices;
-  // Replace elements with a non-positive Jacobian by their trilinear map (default true).
-  bool repair_jacobian;
-  // Fit the boundary to the surface (default true; needs a surface).
-  bool fit;
-  // Write sparse BEXT operator rows (default false: dense, as Hex2Spline).
-  bool sparse_bext;
-} sddpm_spline_options;
 
 #ifdef __cplusplus
 extern "C" {
@@ -455,24 +364,25 @@ sddpm_status sddpm_context_validity(const struct sddpm_context *c,
 // `c` a valid handle; `path` a NUL-terminated path.
 sddpm_status sddpm_context_write_obj(const struct sddpm_context *c, size_t index, const char *path);
 
-// Fill `out` with the default hex options.
-//
-// # Safety
-// `out` writable.
-sddpm_status sddpm_hex_options_default(struct sddpm_hex_options *out);
-
-// Build the all-hex mesh of a polycube result: the best of its verified candidates
-// (up to `hex_candidates`, best score first; fewest inverted elements, then highest
-// minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
-// the best of up to `hex_candidates` diffused ones, best geometric fit first, when
-// `accept_unverified` (the quality reports `verified_polycube` false), else the
-// polycube's VERIFICATION_FAILED.
+// Build the all-hex mesh of a polycube result, in the input's coordinates, as the
+// main job does (one rule for the command line, this call and the Python
+// package): up to "hex_candidates" candidates are meshed, the verified ones best
+// score first, then (with "accept_unverified") unverified ones by geometric fit;
+// the best mesh is kept (fewest inverted elements, then fewest quality goals
+// missed, then highest minimum scaled Jacobian), and when none meets the goals
+// the grid-based fallback ("hex.fallback.enabled") is meshed too and kept when it
+// ranks better (the quality then reports `verified_polycube` false). Without a
+// verified candidate and with "accept_unverified" false: the polycube's
+// VERIFICATION_FAILED; with "require_valid_hex": MESHING_FAILED for a mesh that
+// keeps inverted elements. `options` (NULL: the defaults) gives the "hex.*" options
+// and those three; the polycube's own options are the ones it was generated with.
+// Progress over 0-1.
 //
 // # Safety
 // `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a
 // valid callback; `out` writable.
 sddpm_status sddpm_hex_mesh_build(const struct sddpm_polycube *polycube,
-                                  const struct sddpm_hex_options *options,
+                                  const struct sddpm_options *options,
                                   sddpm_progress_cb progress,
                                   void *user_data,
                                   struct sddpm_hex_mesh **out);
@@ -666,19 +576,14 @@ void sddpm_model_free(struct sddpm_model *m);
 // `m` a valid handle; `out` writable.
 sddpm_status sddpm_model_get_info(const struct sddpm_model *m, struct sddpm_model_info *out);
 
-// Fill `out` with the default polycube options.
-//
-// # Safety
-// `out` writable.
-sddpm_status sddpm_polycube_options_default(struct sddpm_polycube_options *out);
-
 // Generate polycube candidates for `mesh` and verify them. The request is, in
 // order of precedence: `contexts` (complete contexts; a context whose genus differs
 // from the mesh's is refused with GENUS_MISMATCH before any diffusion),
 // `constraints` (expanded to every valid context of the mesh's genus), `ratios`
 // (7 doubles X1,X2,X3,Y1,Y2,Z1,Z2: the automated mode on the full grid with these
 // splitting ratios), or the automated mode over every occupied box when all three
-// are NULL. Returns OK whenever the search ran, even when no candidate passed:
+// are NULL. `options` (NULL: the defaults) gives the "polycube.*" and "auto.*"
+// options. Returns OK whenever the search ran, even when no candidate passed:
 // check sddpm_polycube_status, which returns VERIFICATION_FAILED with the reason.
 //
 // # Safety
@@ -689,7 +594,7 @@ sddpm_status sddpm_generate_polycube(const struct sddpm_model *model,
                                      const struct sddpm_context *contexts,
                                      const struct sddpm_constraints *constraints,
                                      const double *ratios,
-                                     const struct sddpm_polycube_options *options_,
+                                     const struct sddpm_options *options,
                                      sddpm_progress_cb progress,
                                      void *user_data,
                                      struct sddpm_polycube **out);
@@ -753,21 +658,98 @@ sddpm_status sddpm_polycube_copy_points(const struct sddpm_polycube *p,
                                         double *inputs,
                                         size_t capacity);
 
-// Fill `out` with the default spline options.
+// New options holding every default.
 //
 // # Safety
-// `out` writable.
-sddpm_status sddpm_spline_options_default(struct sddpm_spline_options *out);
+// `out` a writable handle pointer.
+sddpm_status sddpm_options_new(struct sddpm_options **out);
+
+// Release options (NULL is a no-op).
+//
+// # Safety
+// `o` NULL or a handle from sddpm_options_new, not used afterwards.
+void sddpm_options_free(struct sddpm_options *o);
+
+// Set a number or integer option, e.g. "hex.map.level" or "hex.goals.hausdorff"
+// (an integer option takes a whole number >= 0). INVALID_ARGUMENT, naming the
+// option, for an unknown name, an option of another type or a value out of its
+// range; the options are then unchanged.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated.
+sddpm_status sddpm_options_set_number(struct sddpm_options *o, const char *name, double value);
+
+// Set a bool option, e.g. "hex.quality.pillow"; errors as sddpm_options_set_number.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated.
+sddpm_status sddpm_options_set_bool(struct sddpm_options *o, const char *name, bool value);
+
+// Set a string option, e.g. "polycube.orientations" to "SignFlips"; errors as
+// sddpm_options_set_number.
+//
+// # Safety
+// `o` a valid handle; `name`, `value` NUL-terminated.
+sddpm_status sddpm_options_set_string(struct sddpm_options *o, const char *name, const char *value);
+
+// Unset an option that may be unset ("nullable" in sddpm_options_describe_json),
+// e.g. "hex.map.level" (the level chosen by the stopping rule again) or
+// "spline.sharp_angle_deg" (no automatic sharp edges); INVALID_ARGUMENT for any
+// other option.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated.
+sddpm_status sddpm_options_unset(struct sddpm_options *o, const char *name);
+
+// The value of a number or integer option. INVALID_ARGUMENT for an unknown name,
+// an option of another type, or an option that is unset; `out` is then untouched.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated; `out` writable.
+sddpm_status sddpm_options_get_number(const struct sddpm_options *o, const char *name, double *out);
+
+// The value of a bool option; errors as sddpm_options_get_number.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated; `out` writable.
+sddpm_status sddpm_options_get_bool(const struct sddpm_options *o, const char *name, bool *out);
+
+// The value of a string option, NUL-terminated, into `buf` (capacity `len`);
+// `needed` (may be NULL) receives its size with the NUL. BUFFER_TOO_SMALL when it
+// does not fit; other errors as sddpm_options_get_number.
+//
+// # Safety
+// `o` a valid handle; `name` NUL-terminated; `buf` NULL or `len` writable bytes;
+// `needed` NULL or writable.
+sddpm_status sddpm_options_get_string(const struct sddpm_options *o,
+                                      const char *name,
+                                      char *buf,
+                                      size_t len,
+                                      size_t *needed);
+
+// Every option as one JSON object, NUL-terminated, into `buf` (capacity `len`):
+// name -> {"value", "default", "type" ("number", "integer", "bool" or "string"),
+// "nullable" (may be unset with sddpm_options_unset), "doc"}; a value that is
+// unset is null. `needed` (may be NULL) receives the size with the NUL;
+// BUFFER_TOO_SMALL when it does not fit. `o` NULL describes the defaults.
+//
+// # Safety
+// `o` NULL or a valid handle; `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+sddpm_status sddpm_options_describe_json(const struct sddpm_options *o,
+                                         char *buf,
+                                         size_t len,
+                                         size_t *needed);
 
 // Build the spline of a hex mesh. The boundary is fitted to `surface` when given,
 // else to the surface the hex mesh was built for (none for a mesh from arrays).
+// `options` (NULL: the defaults) gives the "spline.*" options.
 //
 // # Safety
 // `hex` a valid handle; `surface`, `options` NULL or valid; `progress` NULL or a valid
 // callback; `out` writable.
 sddpm_status sddpm_spline_build(const struct sddpm_hex_mesh *hex,
                                 const struct sddpm_mesh *surface,
-                                const struct sddpm_spline_options *options,
+                                const struct sddpm_options *options,
                                 sddpm_progress_cb progress,
                                 void *user_data,
                                 struct sddpm_spline **out);

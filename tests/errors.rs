@@ -77,7 +77,13 @@ fn every_status_is_produced() {
     push(status_of(Model::from_bytes(b"not a weights file", Backend::default())));
     // BUFFER_TOO_SMALL and INTERNAL: through the C ABI
     unsafe {
-        let st = sddpm::ffi::sddpm_test_force_panic();
+        // a panic inside the C boundary (what the test-hooks build's sddpm_test_force_panic does)
+        let st = sddpm::ffi::guard(|| -> sddpm::Result<()> {
+            if std::hint::black_box(true) {
+                panic!("forced");
+            }
+            Ok(())
+        });
         push((st, "forced panic".into()));
         let mut buf = [0 as std::ffi::c_char; 4];
         let mut need = 0usize;
@@ -107,10 +113,8 @@ fn every_status_is_produced() {
     assert!(m.contains("collapsed") && m.contains("weld tolerance"), "{m}");
     assert!(TriMesh::from_arrays(&x, &tris, &LoadOptions { weld_tolerance: 0.0, ..Default::default() }).unwrap().validate().is_ok());
     // SPLINE_FAILED: a heat-conduction solve on a flat element (singular Jacobian)
-    let mut flat = HexMesh::unit_cube();
-    for p in flat.nodes.iter_mut() {
-        p[2] = 0.0;
-    }
+    // the unit cube's element (VTK_HEXAHEDRON order) pressed flat onto z = 0
+    let flat = HexMesh { nodes: (0..8).map(|i: usize| [((i + 1) / 2 % 2) as f64, (i / 2 % 2) as f64, 0.0]).collect(), elements: vec![[0, 1, 2, 3, 4, 5, 6, 7]] };
     let so = sddpm::spline::SplineOptions { repair_jacobian: false, ..Default::default() };
     push(status_of(sddpm::spline::build_spline(&flat, None, &so, &mut NoProgress).and_then(|sp| {
         sddpm::spline::iga::solve_poisson(&sp, |_| 1.0, |_| 0.0, &sddpm::spline::iga::PoissonOptions::default())

@@ -131,9 +131,20 @@ fn invalid_paths_and_bad_meshes() {
     }
 }
 
+/// A panic inside the boundary every export runs in (what the test-only export
+/// sddpm_test_force_panic of the `test-hooks` build does from C).
+fn force_panic() -> Status {
+    sddpm::ffi::guard(|| -> sddpm::Result<()> {
+        if std::hint::black_box(true) {
+            panic!("forced by the test");
+        }
+        Ok(())
+    })
+}
+
 #[test]
 fn a_panic_becomes_internal_and_the_process_survives() {
-    let s = sddpm_test_force_panic();
+    let s = force_panic();
     assert_eq!(s, Status::Internal);
     assert_eq!(sddpm_last_error_status(), Status::Internal);
     let msg = last_message();
@@ -144,7 +155,7 @@ fn a_panic_becomes_internal_and_the_process_survives() {
 
 #[test]
 fn last_error_is_per_thread() {
-    let _ = sddpm_test_force_panic();
+    let _ = force_panic();
     let other = std::thread::spawn(|| sddpm_last_error_status()).join().unwrap();
     assert_eq!(other, Status::Ok);
     assert_eq!(sddpm_last_error_status(), Status::Internal);
@@ -178,9 +189,6 @@ fn hex_and_spline_handles_contract() {
         assert_eq!(sddpm_hex_mesh_build(null(), null(), None, null_mut(), &mut h), Status::InvalidArgument);
         assert!(last_message().contains("`polycube` is NULL"));
         assert!(h.is_null());
-        let mut ho = std::mem::zeroed::<SddpmHexOptions>();
-        assert_eq!(sddpm_hex_options_default(&mut ho), Status::Ok);
-        assert_eq!(ho.level, -1);
         // the unit cube from arrays, then one with a bad index
         let xyz = [0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0., 0., 0., 1., 1., 0., 1., 1., 1., 1., 0., 1., 1.];
         let bad = [0u32, 1, 2, 3, 4, 5, 6, 8];
@@ -210,7 +218,12 @@ fn hex_and_spline_handles_contract() {
         let mut s = null_mut();
         assert_eq!(sddpm_spline_build(h, null(), null(), Some(cancel), null_mut(), &mut s), Status::Cancelled);
         assert!(s.is_null());
-        assert_eq!(sddpm_spline_build(h, null(), null(), None, null_mut(), &mut s), Status::Ok);
+        let mut o = null_mut();
+        assert_eq!(sddpm_options_new(&mut o), Status::Ok);
+        let fit = CString::new("spline.fit.enabled").unwrap();
+        assert_eq!(sddpm_options_set_bool(o, fit.as_ptr(), false), Status::Ok);
+        assert_eq!(sddpm_spline_build(h, null(), o, None, null_mut(), &mut s), Status::Ok);
+        sddpm_options_free(o);
         let (mut ne, mut nb) = (0usize, 0usize);
         assert_eq!(sddpm_spline_counts(s, &mut ne, &mut nb), Status::Ok);
         assert_eq!(ne, 1);
@@ -283,11 +296,15 @@ fn replay_constraints_unit(name: &str) {
 /// The polycube report of one explicit-context run through the C ABI, without its
 /// timings (which differ from run to run).
 unsafe fn polycube_report(model: *const SddpmModel, mesh: *const SddpmMesh, ctx: *const SddpmContext, seed: u64) -> String {
-    let mut o = std::mem::zeroed::<SddpmPolycubeOptions>();
-    assert_eq!(sddpm_polycube_options_default(&mut o), Status::Ok);
-    o.seed = seed;
+    let mut o = null_mut();
+    assert_eq!(sddpm_options_new(&mut o), Status::Ok);
+    for name in ["polycube.seed", "polycube.sampler.seed"] {
+        let n = CString::new(name).unwrap();
+        assert_eq!(sddpm_options_set_number(o, n.as_ptr(), seed as f64), Status::Ok);
+    }
     let mut p = null_mut();
-    assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), &o, None, null_mut(), &mut p), Status::Ok, "{}", last_message());
+    assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), o, None, null_mut(), &mut p), Status::Ok, "{}", last_message());
+    sddpm_options_free(o);
     let mut need = 0usize;
     assert_eq!(sddpm_polycube_report_json(p, null_mut(), 0, &mut need), Status::BufferTooSmall);
     let mut buf = vec![0 as std::ffi::c_char; need];
@@ -321,28 +338,43 @@ unsafe fn hole_handles() -> (*mut SddpmModel, *mut SddpmMesh, *mut SddpmContext)
     (model, mesh, ctx)
 }
 
-/// The C options carry the core's defaults; a negative or NaN neighbour ratio is
-/// refused before any work, and 0 (the test off) is accepted.
+/// The options handle carries the core's defaults; a value out of range is refused
+/// at once naming the option (the handle keeps its valid value), an unknown name
+/// is refused naming it, and the generation takes what was set (0: the
+/// neighbour test off).
 #[test]
-fn polycube_options_default_and_a_bad_neighbour_ratio() {
+fn options_handle_defaults_refusals_and_a_neighbour_ratio() {
     unsafe {
-        let mut o = std::mem::zeroed::<SddpmPolycubeOptions>();
-        assert_eq!(sddpm_polycube_options_default(&mut o), Status::Ok);
+        let mut o = null_mut();
+        assert_eq!(sddpm_options_new(&mut o), Status::Ok);
+        let name = CString::new("polycube.neighbour_fit_ratio").unwrap();
         let core = sddpm::search::generate::PolycubeOptions::default();
-        assert_eq!(o.neighbour_fit_ratio, core.neighbour_fit_ratio);
-        assert_eq!(o.max_fit, core.max_fit);
-        let (model, mesh, ctx) = hole_handles();
+        let mut x = 0.0;
+        assert_eq!(sddpm_options_get_number(o, name.as_ptr(), &mut x), Status::Ok);
+        assert_eq!(x, core.neighbour_fit_ratio);
         for bad in [-1.0, f64::NAN, f64::INFINITY] {
-            o.neighbour_fit_ratio = bad;
-            let mut p = null_mut();
-            assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), &o, None, null_mut(), &mut p), Status::InvalidArgument);
-            assert!(p.is_null());
-            assert!(last_message().contains("neighbour_fit_ratio"), "{}", last_message());
+            assert_eq!(sddpm_options_set_number(o, name.as_ptr(), bad), Status::InvalidArgument);
+            assert!(last_message().contains("option polycube.neighbour_fit_ratio must be"), "{}", last_message());
         }
-        o.neighbour_fit_ratio = 0.0;
+        assert_eq!(sddpm_options_get_number(o, name.as_ptr(), &mut x), Status::Ok);
+        assert_eq!(x, core.neighbour_fit_ratio, "a refused value changed the option");
+        let unknown = CString::new("polycube.neighbor_fit_ratio").unwrap();
+        assert_eq!(sddpm_options_set_number(o, unknown.as_ptr(), 1.0), Status::InvalidArgument);
+        assert!(last_message().contains("unknown option \"polycube.neighbor_fit_ratio\""), "{}", last_message());
+        let mut need = 0usize;
+        assert_eq!(sddpm_options_describe_json(o, null_mut(), 0, &mut need), Status::BufferTooSmall);
+        let mut buf = vec![0 as std::ffi::c_char; need];
+        assert_eq!(sddpm_options_describe_json(o, buf.as_mut_ptr(), need, null_mut()), Status::Ok);
+        let j: serde_json::Value = serde_json::from_str(CStr::from_ptr(buf.as_ptr()).to_str().unwrap()).unwrap();
+        assert_eq!(j.as_object().unwrap().len(), sddpm::pipeline::options::OPTIONS.len());
+        assert_eq!(j["hex.goals.hausdorff"]["default"].as_f64(), Some(0.01));
+
+        assert_eq!(sddpm_options_set_number(o, name.as_ptr(), 0.0), Status::Ok);
+        let (model, mesh, ctx) = hole_handles();
         let mut p = null_mut();
-        assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), &o, None, null_mut(), &mut p), Status::Ok, "{}", last_message());
+        assert_eq!(sddpm_generate_polycube(model, mesh, ctx, null(), null(), o, None, null_mut(), &mut p), Status::Ok, "{}", last_message());
         sddpm_polycube_free(p);
+        sddpm_options_free(o);
         sddpm_context_free(ctx);
         sddpm_mesh_free(mesh);
         sddpm_model_free(model);

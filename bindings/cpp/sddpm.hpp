@@ -1,7 +1,9 @@
 // libsddpm C++17 API: a header-only RAII layer over the C API of sddpm.h.
 //
-// - Move-only owners (Mesh, Contexts, Model, Polycube, HexMesh, Spline) free their handle in the
-//   destructor; `get()` gives the C handle for calls this header does not wrap.
+// - Move-only owners (Options, Mesh, Contexts, Model, Polycube, HexMesh, Spline) free their handle
+//   in the destructor; `get()` gives the C handle for calls this header does not wrap.
+// - Options are set by name (`Options().set("hex.quality.pillow", false)`); every name, its
+//   type, default and documentation: `Options::describe_json()`.
 // - Every failing C call throws sddpm::Error, carrying the status and the message of
 //   the library (the per-thread last error).
 // - Arrays come back as std::vector; arrays go in as std::span-like (pointer, size)
@@ -25,6 +27,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -124,6 +127,80 @@ using ProgressFn = std::function<bool(double fraction, const std::string& stage)
 
 inline uint32_t abi_version() { return sddpm_abi_version(); }
 inline std::string version() { return sddpm_version_string(); }
+
+// ------------------------------------------------------------------ options
+
+/// The pipeline's options by name ("hex.quality.pillow", "polycube.verify.tau_cd",
+/// "hex_candidates"), each checked when set: an unknown name, a value of another
+/// type or out of range throws Error (INVALID_ARGUMENT, naming the option) and
+/// leaves the options as they were.
+class Options {
+ public:
+  Options() {
+    sddpm_options* o = nullptr;
+    detail::check(sddpm_options_new(&o));
+    h_ = detail::Owner<sddpm_options, sddpm_options_free>(o);
+  }
+  /// A number or integer option (an integer option takes a whole number).
+  Options& set(const std::string& name, double value) {
+    detail::check(sddpm_options_set_number(h_.get(), name.c_str(), value));
+    return *this;
+  }
+  template <typename T, typename std::enable_if<std::is_integral<T>::value && !std::is_same<T, bool>::value, int>::type = 0>
+  Options& set(const std::string& name, T value) {
+    return set(name, static_cast<double>(value));
+  }
+  Options& set(const std::string& name, bool value) {
+    detail::check(sddpm_options_set_bool(h_.get(), name.c_str(), value));
+    return *this;
+  }
+  Options& set(const std::string& name, const std::string& value) {
+    detail::check(sddpm_options_set_string(h_.get(), name.c_str(), value.c_str()));
+    return *this;
+  }
+  Options& set(const std::string& name, const char* value) { return set(name, std::string(value)); }
+  /// Unset an option that may be unset (e.g. "hex.map.level": chosen automatically).
+  Options& unset(const std::string& name) {
+    detail::check(sddpm_options_unset(h_.get(), name.c_str()));
+    return *this;
+  }
+  double get_number(const std::string& name) const {
+    double x = 0;
+    detail::check(sddpm_options_get_number(h_.get(), name.c_str(), &x));
+    return x;
+  }
+  bool get_bool(const std::string& name) const {
+    bool b = false;
+    detail::check(sddpm_options_get_bool(h_.get(), name.c_str(), &b));
+    return b;
+  }
+  std::string get_string(const std::string& name) const {
+    size_t need = 0;
+    sddpm_status st = sddpm_options_get_string(h_.get(), name.c_str(), nullptr, 0, &need);
+    if (st != SDDPM_STATUS_BUFFER_TOO_SMALL) detail::check(st);
+    std::string s(need, '\0');
+    detail::check(sddpm_options_get_string(h_.get(), name.c_str(), &s[0], s.size(), &need));
+    s.resize(need > 0 ? need - 1 : 0);
+    return s;
+  }
+  /// Every option as a JSON object: name -> {value, default, type, nullable, doc}.
+  std::string describe_json() const {
+    size_t need = 0;
+    sddpm_options_describe_json(h_.get(), nullptr, 0, &need);
+    std::string s(need, '\0');
+    detail::check(sddpm_options_describe_json(h_.get(), &s[0], s.size(), &need));
+    s.resize(need > 0 ? need - 1 : 0);
+    return s;
+  }
+  const sddpm_options* get() const noexcept { return h_.get(); }
+
+ private:
+  detail::Owner<sddpm_options, sddpm_options_free> h_;
+};
+
+namespace detail {
+inline const sddpm_options* opts(const Options* o) { return o ? o->get() : nullptr; }
+}  // namespace detail
 
 // ------------------------------------------------------------------ mesh
 
@@ -301,21 +378,16 @@ struct PolycubeRequest {
   const std::array<double, 7>* ratios = nullptr;
 };
 
-inline sddpm_polycube_options default_polycube_options() {
-  sddpm_polycube_options o{};
-  detail::check(sddpm_polycube_options_default(&o));
-  return o;
-}
-
 /// The result of a polycube search (all candidates with their verification).
 class Polycube {
  public:
-  static Polycube generate(const Model& model, const Mesh& mesh, const PolycubeRequest& req = {},
-                           const sddpm_polycube_options& opts = default_polycube_options(), ProgressFn progress = {}) {
+  /// `opts` null: the defaults (the "polycube.*" and "auto.*" options are used).
+  static Polycube generate(const Model& model, const Mesh& mesh, const PolycubeRequest& req = {}, const Options* opts = nullptr,
+                           ProgressFn progress = {}) {
     detail::Progress p{std::move(progress), nullptr};
     sddpm_polycube* out = nullptr;
     sddpm_status s = sddpm_generate_polycube(model.get(), mesh.get(), req.contexts ? req.contexts->get() : nullptr, req.constraints,
-                                             req.ratios ? req.ratios->data() : nullptr, &opts, p.cb(), p.data(), &out);
+                                             req.ratios ? req.ratios->data() : nullptr, detail::opts(opts), p.cb(), p.data(), &out);
     Polycube pc(out);  // owns the handle even if finish() throws
     p.finish(s);
     return pc;
@@ -362,20 +434,16 @@ class Polycube {
 
 // ------------------------------------------------------------------ hex mesh
 
-inline sddpm_hex_options default_hex_options() {
-  sddpm_hex_options o{};
-  detail::check(sddpm_hex_options_default(&o));
-  return o;
-}
-
 /// An all-hex mesh (VTK_HEXAHEDRON node order) with its quality.
 class HexMesh {
  public:
-  /// Build from a polycube result (its best verified candidate(s)).
-  static HexMesh build(const Polycube& pc, const sddpm_hex_options& opts = default_hex_options(), ProgressFn progress = {}) {
+  /// Build from a polycube result as the main job does (its best candidates, the
+  /// grid-based fallback when none meets the goals); `opts` null: the defaults
+  /// (the "hex.*" options, "hex_candidates", "accept_unverified", "require_valid_hex").
+  static HexMesh build(const Polycube& pc, const Options* opts = nullptr, ProgressFn progress = {}) {
     detail::Progress p{std::move(progress), nullptr};
     sddpm_hex_mesh* out = nullptr;
-    sddpm_status s = sddpm_hex_mesh_build(pc.get(), &opts, p.cb(), p.data(), &out);
+    sddpm_status s = sddpm_hex_mesh_build(pc.get(), detail::opts(opts), p.cb(), p.data(), &out);
     HexMesh h(out);
     p.finish(s);
     return h;
@@ -437,12 +505,6 @@ class HexMesh {
 
 // ------------------------------------------------------------------ spline
 
-inline sddpm_spline_options default_spline_options() {
-  sddpm_spline_options o{};
-  detail::check(sddpm_spline_options_default(&o));
-  return o;
-}
-
 /// One element's Bézier extraction: basis ids and rows of 64 Bernstein coefficients.
 struct Extraction {
   std::vector<uint32_t> basis;
@@ -452,12 +514,12 @@ struct Extraction {
 /// The TH-spline3D volume with its Bézier extraction.
 class Spline {
  public:
-  /// Fitted to `surface`, or to the surface the hex mesh was built for when null.
-  static Spline build(const HexMesh& hex, const Mesh* surface = nullptr, const sddpm_spline_options& opts = default_spline_options(),
-                      ProgressFn progress = {}) {
+  /// Fitted to `surface`, or to the surface the hex mesh was built for when null;
+  /// `opts` null: the defaults (the "spline.*" options are used).
+  static Spline build(const HexMesh& hex, const Mesh* surface = nullptr, const Options* opts = nullptr, ProgressFn progress = {}) {
     detail::Progress p{std::move(progress), nullptr};
     sddpm_spline* out = nullptr;
-    sddpm_status s = sddpm_spline_build(hex.get(), surface ? surface->get() : nullptr, &opts, p.cb(), p.data(), &out);
+    sddpm_status s = sddpm_spline_build(hex.get(), surface ? surface->get() : nullptr, detail::opts(opts), p.cb(), p.data(), &out);
     Spline sp(out);
     p.finish(s);
     return sp;

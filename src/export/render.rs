@@ -131,11 +131,6 @@ impl Canvas {
         image::save_buffer(path, &buf, self.width as u32, self.height as u32, image::ColorType::Rgb8)
             .map_err(|e| Error::io(path.display(), e))
     }
-
-    /// Fraction of pixels that are not background (a picture check for tests).
-    pub fn coverage(&self) -> f64 {
-        self.rgb.iter().filter(|c| **c != [255, 255, 255]).count() as f64 / self.rgb.len().max(1) as f64
-    }
 }
 
 /// Draw the layers into a `width` x `height` canvas, framed to fit all of them.

@@ -2,12 +2,13 @@
 //! counts, nodes, elements, quality, export to every format, free.
 
 use super::model::SddpmPolycube;
-use super::{c_path, copy_slice, copy_string, ffi_boundary, non_null, CProgress, SddpmProgressCb};
+use super::options::run_options;
+use super::{c_path, copy_slice, copy_string, ffi_boundary, non_null, CProgress, SddpmOptions, SddpmProgressCb};
 use crate::error::{Error, Result, Status};
 use crate::hex::quality::{element_qualities, summarize};
-use crate::hex::{HexMesh, HexOption, HexOptions, HexResult};
+use crate::hex::{HexMesh, HexResult};
 use crate::mesh::TriMesh;
-use crate::pipeline::{build_hex_for_polycube, fallback_order, ranked_verified, RunOptions};
+use crate::pipeline::mesh_polycube;
 use std::ffi::{c_char, c_void};
 
 /// An opaque all-hex mesh with its quality; not thread-safe to free while in use,
@@ -20,68 +21,6 @@ pub struct SddpmHexMesh {
     /// The surface the mesh was built for (the spline's default fitting target).
     pub(crate) surface: Option<TriMesh>,
     pub(crate) verified: bool,
-}
-
-/// Options of the hex stage; fill with sddpm_hex_options_default, then change fields.
-#[repr(C)]
-#[derive(Debug, Clone, Copy)]
-pub struct SddpmHexOptions {
-    /// Fixed octree level, or -1 to choose it by the stopping rule (default -1).
-    pub level: i32,
-    /// Smallest and largest level the stopping rule may choose (defaults 2 and 4).
-    pub min_level: u32,
-    pub max_level: u32,
-    /// Stopping-rule threshold, fraction of the bounding-box diagonal (default 0.005).
-    pub threshold: f64,
-    /// Most elements before pillowing (default 200000): caps the automatic level (not
-    /// below min_level) and the fallback's lattices.
-    pub max_elements: usize,
-    /// Dihedral angle in degrees above which an input edge is a feature (default 40).
-    pub feature_angle: f64,
-    /// One pillow layer (default true).
-    pub pillow: bool,
-    /// Smoothing passes (default 20) and Jacobian-optimisation passes (default 30).
-    pub smooth_iterations: u32,
-    pub optimise_passes: u32,
-    /// Optimisation works on elements below this scaled Jacobian (default 0.8).
-    pub optimise_target: f64,
-    /// Candidates meshed (verified ones, else diffused ones by fit); the best mesh is kept (default 4).
-    pub hex_candidates: u32,
-    /// Mesh the best-fitting diffused candidate when none passed verification (default true).
-    pub accept_unverified: bool,
-    /// When no candidate's mesh meets the goals below (with a fixed level: when every
-    /// one keeps inverted elements), also mesh the input on a voxel lattice and keep
-    /// that mesh when it ranks better (default true; the quality then reports
-    /// `verified_polycube` false).
-    pub voxel_fallback: bool,
-    /// Voxels along the longest bounding-box edge of the fallback's first lattice
-    /// (default 24; doubled while its topology is wrong, refined while it misses the goals).
-    pub voxel_resolution: u32,
-    /// Quality goals: minimum and mean scaled Jacobian (defaults 0.3 and 0.85) and the
-    /// two-sided Hausdorff distance to the input over the bounding-box diagonal
-    /// (default 0.01). Meshes are ranked by inverted elements, then goals missed, then
-    /// how far they miss them (sum of the relative misses), then minimum scaled Jacobian.
-    pub goal_min_scaled_jacobian: f64,
-    pub goal_mean_scaled_jacobian: f64,
-    pub goal_hausdorff: f64,
-    /// How many finer lattices the fallback may try after its first (default 2; 0:
-    /// the first lattice only).
-    pub voxel_refinements: u32,
-    /// Coverage step: input vertices farther than this fraction of the Hausdorff goal
-    /// from the boundary get a boundary node pinned to them (default 0: off; 0.6 was
-    /// measured).
-    pub pin_uncovered: f64,
-    /// Sharp-edge capture steps (after smoothing and after the optimisation):
-    /// boundary nodes near the input's sharp edges go onto them (default true).
-    pub capture_features: bool,
-    /// Local refinement rounds of the fallback: the voxels around the points
-    /// farthest from its mesh split 3 x 3 x 3 with conforming transition elements
-    /// (default 0: off). ABI 3.
-    pub local_refinement: u32,
-    /// Feature sheets on the fallback's lattice meshes: a sheet of elements under
-    /// each surface patch, the nodes between patches onto the input's sharp curves
-    /// (default true; docs/hex.md "Feature sheets"). ABI 4.
-    pub feature_sheets: bool,
 }
 
 /// Quality summary of a hex mesh.
@@ -126,106 +65,19 @@ unsafe fn hex_ref<'a>(h: *const SddpmHexMesh) -> Result<&'a SddpmHexMesh> {
     Ok(&*h)
 }
 
-/// Fill `out` with the default hex options.
-///
-/// # Safety
-/// `out` writable.
-#[no_mangle]
-pub unsafe extern "C" fn sddpm_hex_options_default(out: *mut SddpmHexOptions) -> Status {
-    ffi_boundary! {
-        non_null(out, "out")?;
-        let h = HexOptions::default();
-        let r = RunOptions::default();
-        *out = SddpmHexOptions {
-            level: -1,
-            min_level: h.map.min_level,
-            max_level: h.map.max_level,
-            threshold: h.map.threshold,
-            max_elements: h.max_elements,
-            feature_angle: h.surface.feature_angle,
-            pillow: h.quality.pillow,
-            smooth_iterations: h.quality.smooth_iterations as u32,
-            optimise_passes: h.quality.optimise_passes as u32,
-            optimise_target: h.quality.optimise_target,
-            hex_candidates: r.hex_candidates as u32,
-            accept_unverified: r.accept_unverified,
-            voxel_fallback: h.fallback.enabled,
-            voxel_resolution: h.fallback.resolution as u32,
-            goal_min_scaled_jacobian: h.goals.min_scaled_jacobian,
-            goal_mean_scaled_jacobian: h.goals.mean_scaled_jacobian,
-            goal_hausdorff: h.goals.hausdorff,
-            voxel_refinements: h.fallback.refinements as u32,
-            pin_uncovered: h.quality.pin_uncovered,
-            capture_features: h.quality.capture_features,
-            local_refinement: h.fallback.local_refinement as u32,
-            feature_sheets: h.quality.feature_sheets,
-        };
-        Ok(())
-    }
-}
-
-/// The core options of the C options (None: the defaults), checked by
-/// [`HexOptions::validate`] with the bad option named by its C field; with the
-/// run's `hex_candidates` and `accept_unverified`.
-fn hex_options(o: Option<&SddpmHexOptions>) -> Result<(HexOptions, usize, bool)> {
-    let mut h = HexOptions::default();
-    let r = RunOptions::default();
-    let Some(o) = o else { return Ok((h, r.hex_candidates, r.accept_unverified)) };
-    if o.level < -1 {
-        return Err(Error::InvalidArgument(format!("hex options: level must be -1 (automatic) or a subdivision level in 0..=6, got {}", o.level)));
-    }
-    h.map.level = (o.level >= 0).then_some(o.level as u32);
-    h.map.min_level = o.min_level;
-    h.map.max_level = o.max_level;
-    h.map.threshold = o.threshold;
-    h.max_elements = o.max_elements;
-    h.surface.feature_angle = o.feature_angle;
-    h.quality.pillow = o.pillow;
-    h.quality.smooth_iterations = o.smooth_iterations as usize;
-    h.quality.optimise_passes = o.optimise_passes as usize;
-    h.quality.optimise_target = o.optimise_target;
-    h.quality.pin_uncovered = o.pin_uncovered;
-    h.quality.capture_features = o.capture_features;
-    h.quality.feature_sheets = o.feature_sheets;
-    h.fallback.enabled = o.voxel_fallback;
-    h.fallback.resolution = o.voxel_resolution as usize;
-    h.fallback.refinements = o.voxel_refinements as usize;
-    h.fallback.local_refinement = o.local_refinement as usize;
-    h.goals = crate::hex::QualityGoals {
-        min_scaled_jacobian: o.goal_min_scaled_jacobian,
-        mean_scaled_jacobian: o.goal_mean_scaled_jacobian,
-        hausdorff: o.goal_hausdorff,
-    };
-    h.validate().map_err(|e| Error::InvalidArgument(format!("hex options: {} must be {}, got {}", c_field(e.option), e.expected, e.value)))?;
-    Ok((h, (o.hex_candidates as usize).max(1), o.accept_unverified))
-}
-
-/// The field of sddpm_hex_options that sets a hex option (the core's path for
-/// the options the C struct leaves at their defaults).
-fn c_field(o: HexOption) -> &'static str {
-    match o {
-        HexOption::Level => "level",
-        HexOption::MinLevel => "min_level",
-        HexOption::MaxLevel => "max_level",
-        HexOption::Threshold => "threshold",
-        HexOption::FeatureAngle => "feature_angle",
-        HexOption::OptimiseTarget => "optimise_target",
-        HexOption::PinUncovered => "pin_uncovered",
-        HexOption::VoxelResolution => "voxel_resolution",
-        HexOption::GoalMinScaledJacobian => "goal_min_scaled_jacobian",
-        HexOption::GoalMeanScaledJacobian => "goal_mean_scaled_jacobian",
-        HexOption::GoalHausdorff => "goal_hausdorff",
-        HexOption::MaxElements => "max_elements",
-        other => other.path(),
-    }
-}
-
-/// Build the all-hex mesh of a polycube result: the best of its verified candidates
-/// (up to `hex_candidates`, best score first; fewest inverted elements, then highest
-/// minimum scaled Jacobian), in the input's coordinates. Without a verified candidate:
-/// the best of up to `hex_candidates` diffused ones, best geometric fit first, when
-/// `accept_unverified` (the quality reports `verified_polycube` false), else the
-/// polycube's VERIFICATION_FAILED.
+/// Build the all-hex mesh of a polycube result, in the input's coordinates, as the
+/// main job does (one rule for the command line, this call and the Python
+/// package): up to "hex_candidates" candidates are meshed, the verified ones best
+/// score first, then (with "accept_unverified") unverified ones by geometric fit;
+/// the best mesh is kept (fewest inverted elements, then fewest quality goals
+/// missed, then highest minimum scaled Jacobian), and when none meets the goals
+/// the grid-based fallback ("hex.fallback.enabled") is meshed too and kept when it
+/// ranks better (the quality then reports `verified_polycube` false). Without a
+/// verified candidate and with "accept_unverified" false: the polycube's
+/// VERIFICATION_FAILED; with "require_valid_hex": MESHING_FAILED for a mesh that
+/// keeps inverted elements. `options` (NULL: the defaults) gives the "hex.*" options
+/// and those three; the polycube's own options are the ones it was generated with.
+/// Progress over 0-1.
 ///
 /// # Safety
 /// `polycube` a valid handle; `options` NULL (defaults) or valid; `progress` NULL or a
@@ -233,7 +85,7 @@ fn c_field(o: HexOption) -> &'static str {
 #[no_mangle]
 pub unsafe extern "C" fn sddpm_hex_mesh_build(
     polycube: *const SddpmPolycube,
-    options: *const SddpmHexOptions,
+    options: *const SddpmOptions,
     progress: SddpmProgressCb,
     user_data: *mut c_void,
     out: *mut *mut SddpmHexMesh,
@@ -242,35 +94,19 @@ pub unsafe extern "C" fn sddpm_hex_mesh_build(
         non_null(polycube, "polycube")?;
         non_null(out, "out")?;
         let pc = &*polycube;
-        let (mut hopts, n, accept) = hex_options(options.as_ref())?;
-        let mut result = std::borrow::Cow::Borrowed(&pc.result);
-        let (order, verified) = if pc.result.chosen.is_some() {
-            let mut o = ranked_verified(&pc.result);
-            o.truncate(n);
-            (o, true)
-        } else {
-            let refusal = || pc.result.accepted().err().unwrap_or_else(|| Error::VerificationFailed("no candidate".into()));
-            if !accept {
-                return Err(refusal());
-            }
-            hopts.map.use_correspondence = false;
-            let r = result.to_mut();
-            let genus = r.input_genus;
-            let o = fallback_order(r, &pc.mesh, &pc.options, genus, n);
-            if o.is_empty() {
-                return Err(refusal());
-            }
-            (o, false)
-        };
+        let mut opts = run_options(options);
+        opts.polycube = pc.options.clone();
+        // the handle is shared: the candidates the order lays out go into a copy
+        let mut result = pc.result.clone();
         let mut p = CProgress { callback: progress, user_data };
-        let (_, _, r) = build_hex_for_polycube(&result, &order, &pc.mesh, &hopts, &mut p)?;
-        let verified = verified && r.from_polycube();
+        let stage = mesh_polycube(&mut result, pc.error.clone(), &pc.mesh, &opts, &mut p)?;
+        let r = stage.hex;
         *out = Box::into_raw(Box::new(SddpmHexMesh {
             mesh: r.mesh.clone(),
             scaled_jacobian: r.scaled_jacobian.clone(),
             result: Some(r),
             surface: Some(pc.mesh.clone()),
-            verified,
+            verified: stage.verified,
         }));
         Ok(())
     }
@@ -477,44 +313,6 @@ pub unsafe extern "C" fn sddpm_hex_mesh_write(h: *const SddpmHexMesh, path: *con
             f if f == SddpmHexFormat::Medit as i32 => crate::export::hexfmt::write_medit(&p, &h.mesh),
             f if f == SddpmHexFormat::Lsdyna as i32 => crate::export::hexfmt::write_lsdyna(&p, &h.mesh, "sddpm hex mesh"),
             f => Err(Error::InvalidArgument(format!("format {f} is not an sddpm_hex_format (0 VTU, 1 legacy VTK, 2 Medit, 3 LS-DYNA)"))),
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The C defaults are the core's, and goals that cannot be compared are refused
-    /// with the values named.
-    #[test]
-    fn hex_options_round_trip_and_bad_goals() {
-        let mut o = std::mem::MaybeUninit::<SddpmHexOptions>::uninit();
-        assert_eq!(unsafe { sddpm_hex_options_default(o.as_mut_ptr()) }, Status::Ok);
-        let o = unsafe { o.assume_init() };
-        let (h, _, _) = hex_options(Some(&o)).unwrap();
-        assert_eq!(h.goals, crate::hex::QualityGoals::default());
-        assert_eq!(h, HexOptions::default());
-        for (bad, field) in [
-            (SddpmHexOptions { goal_hausdorff: f64::NAN, ..o }, "goal_hausdorff"),
-            (SddpmHexOptions { goal_hausdorff: -0.01, ..o }, "goal_hausdorff"),
-            (SddpmHexOptions { goal_mean_scaled_jacobian: f64::INFINITY, ..o }, "goal_mean_scaled_jacobian"),
-            (SddpmHexOptions { max_elements: 0, ..o }, "max_elements"),
-            (SddpmHexOptions { min_level: 5, ..o }, "min_level"),
-            (SddpmHexOptions { level: -2, ..o }, "level"),
-        ] {
-            let e = hex_options(Some(&bad)).unwrap_err().to_string();
-            assert!(e.contains(&format!("hex options: {field} must be")), "{e}");
-        }
-        let e = hex_options(Some(&SddpmHexOptions { voxel_resolution: 1, ..o })).unwrap_err().to_string();
-        assert!(e.contains("voxel_resolution must be between 2 and 192, got 1"), "{e}");
-        let (h, _, _) = hex_options(Some(&SddpmHexOptions { voxel_refinements: 0, pin_uncovered: 0.6, capture_features: false, local_refinement: 3, feature_sheets: false, ..o })).unwrap();
-        assert_eq!((h.fallback.refinements, h.quality.pin_uncovered, h.quality.capture_features, h.fallback.local_refinement, h.quality.feature_sheets), (0, 0.6, false, 3, false));
-        assert_eq!((o.local_refinement, o.feature_sheets), (0, true));
-        assert_eq!((o.voxel_refinements as usize, o.pin_uncovered, o.capture_features), (HexOptions::default().fallback.refinements, 0.0, true));
-        for bad in [f64::NAN, -0.1, f64::INFINITY] {
-            let e = hex_options(Some(&SddpmHexOptions { pin_uncovered: bad, ..o })).unwrap_err().to_string();
-            assert!(e.contains("pin_uncovered"), "{e}");
         }
     }
 }

@@ -17,15 +17,17 @@ mod context;
 mod hex;
 mod mesh;
 mod model;
+mod options;
 mod spline;
 pub use context::*;
 pub use hex::*;
 pub use mesh::*;
 pub use model::*;
+pub use options::*;
 pub use spline::*;
 
 /// Version of the C ABI: bumped whenever a declaration in include/sddpm.h changes incompatibly.
-pub const ABI_VERSION: u32 = 4;
+pub const ABI_VERSION: u32 = 5;
 
 /// The panic boundary around every export: runs the body (a closure body whose
 /// value implements [`FfiReturn`]), records errors and panics as the thread's
@@ -212,8 +214,11 @@ pub extern "C" fn sddpm_last_error_clear() {
     ffi_boundary! { LAST_ERROR.with(|e| *e.borrow_mut() = None) }
 }
 
-/// Test-only export (left out of the header): panics inside the boundary so
-/// that contract tests can check a panic becomes SDDPM_STATUS_INTERNAL.
+/// Test-only export (left out of the header; built only with the cargo feature
+/// `test-hooks`, which the C++ contract tests' CMake build enables): panics inside
+/// the boundary so that contract tests can check a panic becomes
+/// SDDPM_STATUS_INTERNAL.
+#[cfg(feature = "test-hooks")]
 #[doc(hidden)]
 #[no_mangle]
 pub extern "C" fn sddpm_test_force_panic() -> Status {

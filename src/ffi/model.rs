@@ -2,9 +2,9 @@
 //! generation (user-guided or automated) with its result handle.
 
 use super::context::SddpmContext;
-use super::{ffi_boundary, non_null, CProgress, SddpmConstraints, SddpmMesh, SddpmProgressCb};
-use crate::search::auto::{AutoOptions, AutoReport, SplitRatios};
-use crate::search::generate::{OrientationSearch, PolycubeOptions, PolycubeResult, Stage};
+use super::{ffi_boundary, non_null, CProgress, SddpmConstraints, SddpmMesh, SddpmOptions, SddpmProgressCb};
+use crate::search::auto::{AutoReport, SplitRatios};
+use crate::search::generate::{PolycubeOptions, PolycubeResult, Stage};
 use crate::diffusion::{Backend, Model};
 use crate::error::{Error, Result, Status};
 use crate::pipeline::{generate_polycube, ContextRequest};
@@ -115,80 +115,6 @@ pub unsafe extern "C" fn sddpm_model_get_info(m: *const SddpmModel, out: *mut Sd
     }
 }
 
-/// Options of polycube generation; fill with sddpm_polycube_options_default.
-#[repr(C)]
-#[derive(Debug, Clone, Copy)]
-pub struct SddpmPolycubeOptions {
-    /// Seed of sampling and diffusion (default 0).
-    pub seed: u64,
-    /// Reverse-diffusion steps: 0 = the full T-step sampler, n = strided (default: library default).
-    pub sampler_steps: u32,
-    /// 0 = frame as aligned, 1 = also its sign flips, 2 = all 24 grid rotations (default 2).
-    pub orientations: u32,
-    /// TCV threshold tau_CD, squared cell units (default 0.015).
-    pub tau_cd: f64,
-    /// Occupancy pre-check: most surface allowed in empty cells (default 0.03).
-    pub max_in_empty_fraction: f64,
-    /// Geometric pre-check: largest fit score diffused (default 0.05).
-    pub max_fit: f64,
-    /// Automated mode: voxels along the longest edge of the temporary volume (default 48).
-    pub auto_resolution: u32,
-    /// User-guided pre-check: refuse a context when relabelling one of its cells fits
-    /// the input this many times better (default 1.5; 0 turns the test off).
-    pub neighbour_fit_ratio: f64,
-}
-
-/// Fill `out` with the default polycube options.
-///
-/// # Safety
-/// `out` writable.
-#[no_mangle]
-pub unsafe extern "C" fn sddpm_polycube_options_default(out: *mut SddpmPolycubeOptions) -> Status {
-    ffi_boundary! {
-        non_null(out, "out")?;
-        let p = PolycubeOptions::default();
-        *out = SddpmPolycubeOptions {
-            seed: p.seed,
-            sampler_steps: p.sampler.steps as u32,
-            orientations: 2,
-            tau_cd: p.verify.tau_cd,
-            max_in_empty_fraction: p.max_in_empty_fraction,
-            max_fit: p.max_fit,
-            auto_resolution: AutoOptions::default().resolution as u32,
-            neighbour_fit_ratio: p.neighbour_fit_ratio,
-        };
-        Ok(())
-    }
-}
-
-fn options(o: Option<&SddpmPolycubeOptions>) -> Result<(PolycubeOptions, AutoOptions)> {
-    let mut p = PolycubeOptions::default();
-    let mut a = AutoOptions::default();
-    if let Some(o) = o {
-        if !(o.tau_cd > 0.0 && o.tau_cd.is_finite()) || !(0.0..=1.0).contains(&o.max_in_empty_fraction) || !(o.max_fit > 0.0) {
-            return Err(Error::InvalidArgument("polycube options: tau_cd and max_fit must be positive, max_in_empty_fraction in [0, 1]".into()));
-        }
-        if !(o.neighbour_fit_ratio >= 0.0 && o.neighbour_fit_ratio.is_finite()) {
-            return Err(Error::InvalidArgument(format!("polycube options: neighbour_fit_ratio {} must be finite and >= 0 (0 turns the test off)", o.neighbour_fit_ratio)));
-        }
-        p.seed = o.seed;
-        p.sampler.seed = o.seed;
-        p.sampler.steps = o.sampler_steps as usize;
-        p.orientations = match o.orientations {
-            0 => OrientationSearch::Identity,
-            1 => OrientationSearch::SignFlips,
-            2 => OrientationSearch::All,
-            x => return Err(Error::InvalidArgument(format!("polycube options: orientations {x} is not 0, 1 or 2"))),
-        };
-        p.verify.tau_cd = o.tau_cd;
-        p.max_in_empty_fraction = o.max_in_empty_fraction;
-        p.max_fit = o.max_fit;
-        a.resolution = (o.auto_resolution as usize).clamp(8, 256);
-        p.neighbour_fit_ratio = o.neighbour_fit_ratio;
-    }
-    Ok((p, a))
-}
-
 /// The result of polycube generation (release with sddpm_polycube_free). Immutable
 /// once created: read calls and sddpm_hex_mesh_build may come from several threads
 /// at once; freeing it while another thread uses it is not allowed.
@@ -198,7 +124,8 @@ pub struct SddpmPolycube {
     pub(crate) error: Option<Error>,
     /// The input surface (what the hex stage maps and the spline fits).
     pub(crate) mesh: crate::mesh::TriMesh,
-    /// The options it was generated with (the hex stage's fallback reuses them).
+    /// The options it was generated with (the hex stage lays out the candidates it
+    /// adds with their seed).
     pub(crate) options: PolycubeOptions,
 }
 
@@ -208,7 +135,8 @@ pub struct SddpmPolycube {
 /// `constraints` (expanded to every valid context of the mesh's genus), `ratios`
 /// (7 doubles X1,X2,X3,Y1,Y2,Z1,Z2: the automated mode on the full grid with these
 /// splitting ratios), or the automated mode over every occupied box when all three
-/// are NULL. Returns OK whenever the search ran, even when no candidate passed:
+/// are NULL. `options` (NULL: the defaults) gives the "polycube.*" and "auto.*"
+/// options. Returns OK whenever the search ran, even when no candidate passed:
 /// check sddpm_polycube_status, which returns VERIFICATION_FAILED with the reason.
 ///
 /// # Safety
@@ -221,7 +149,7 @@ pub unsafe extern "C" fn sddpm_generate_polycube(
     contexts: *const SddpmContext,
     constraints: *const SddpmConstraints,
     ratios: *const f64,
-    options_: *const SddpmPolycubeOptions,
+    options: *const SddpmOptions,
     progress: SddpmProgressCb,
     user_data: *mut c_void,
     out: *mut *mut SddpmPolycube,
@@ -233,7 +161,8 @@ pub unsafe extern "C" fn sddpm_generate_polycube(
         let mesh = (*mesh).mesh();
         let report = mesh.validate()?;
         let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the mesh is undefined".into()))?;
-        let (popts, aopts) = options(options_.as_ref())?;
+        let run = super::options::run_options(options);
+        let (popts, aopts) = (run.polycube, run.auto);
         let request = if !contexts.is_null() {
             ContextRequest::Contexts((*contexts).contexts.clone())
         } else if !constraints.is_null() {

@@ -3,10 +3,10 @@
 
 use super::hex::SddpmHexMesh;
 use super::mesh::SddpmMesh;
-use super::{c_path, copy_string, ffi_boundary, non_null, CProgress, SddpmProgressCb};
+use super::{c_path, copy_string, ffi_boundary, non_null, CProgress, SddpmOptions, SddpmProgressCb};
 use crate::error::{Error, Result, Status};
 use crate::export::spline_files::OutputOptions;
-use crate::spline::{build_spline, Spline, SplineOptions};
+use crate::spline::{build_spline, Spline};
 use std::ffi::{c_char, c_void};
 
 /// An opaque volumetric spline (read-only calls may come from several threads).
@@ -14,69 +14,14 @@ pub struct SddpmSpline {
     pub(crate) spline: Spline,
 }
 
-/// Options of the spline stage; fill with sddpm_spline_options_default.
-#[repr(C)]
-#[derive(Debug, Clone, Copy)]
-pub struct SddpmSplineOptions {
-    /// Boundary edges sharper than this dihedral angle (degrees) are sharp features
-    /// (default 60); negative turns automatic detection off.
-    pub sharp_angle_deg: f64,
-    /// C0 Bernstein functions on the two layers next to the boundary (default false).
-    pub boundary_enrichment: bool,
-    /// Control points chosen so the spline interpolates the control-mesh vertices (default false).
-    pub interpolate_vertices: bool,
-    /// Replace elements with a non-positive Jacobian by their trilinear map (default true).
-    pub repair_jacobian: bool,
-    /// Fit the boundary to the surface (default true; needs a surface).
-    pub fit: bool,
-    /// Write sparse BEXT operator rows (default false: dense, as Hex2Spline).
-    pub sparse_bext: bool,
-}
-
 unsafe fn sp_ref<'a>(s: *const SddpmSpline) -> Result<&'a SddpmSpline> {
     non_null(s, "spline")?;
     Ok(&*s)
 }
 
-/// Fill `out` with the default spline options.
-///
-/// # Safety
-/// `out` writable.
-#[no_mangle]
-pub unsafe extern "C" fn sddpm_spline_options_default(out: *mut SddpmSplineOptions) -> Status {
-    ffi_boundary! {
-        non_null(out, "out")?;
-        let d = SplineOptions::default();
-        *out = SddpmSplineOptions {
-            sharp_angle_deg: d.sharp_angle_deg.unwrap_or(-1.0),
-            boundary_enrichment: d.boundary_enrichment,
-            interpolate_vertices: d.interpolate_vertices,
-            repair_jacobian: d.repair_jacobian,
-            fit: d.fit.enabled,
-            sparse_bext: d.sparse_bext,
-        };
-        Ok(())
-    }
-}
-
-fn spline_options(o: Option<&SddpmSplineOptions>) -> Result<SplineOptions> {
-    let mut s = SplineOptions::default();
-    if let Some(o) = o {
-        if o.sharp_angle_deg.is_nan() || o.sharp_angle_deg > 180.0 {
-            return Err(Error::InvalidArgument(format!("spline options: sharp_angle_deg {} (0..180, negative = off)", o.sharp_angle_deg)));
-        }
-        s.sharp_angle_deg = (o.sharp_angle_deg >= 0.0).then_some(o.sharp_angle_deg);
-        s.boundary_enrichment = o.boundary_enrichment;
-        s.interpolate_vertices = o.interpolate_vertices;
-        s.repair_jacobian = o.repair_jacobian;
-        s.fit.enabled = o.fit;
-        s.sparse_bext = o.sparse_bext;
-    }
-    Ok(s)
-}
-
 /// Build the spline of a hex mesh. The boundary is fitted to `surface` when given,
 /// else to the surface the hex mesh was built for (none for a mesh from arrays).
+/// `options` (NULL: the defaults) gives the "spline.*" options.
 ///
 /// # Safety
 /// `hex` a valid handle; `surface`, `options` NULL or valid; `progress` NULL or a valid
@@ -85,7 +30,7 @@ fn spline_options(o: Option<&SddpmSplineOptions>) -> Result<SplineOptions> {
 pub unsafe extern "C" fn sddpm_spline_build(
     hex: *const SddpmHexMesh,
     surface: *const SddpmMesh,
-    options: *const SddpmSplineOptions,
+    options: *const SddpmOptions,
     progress: SddpmProgressCb,
     user_data: *mut c_void,
     out: *mut *mut SddpmSpline,
@@ -94,7 +39,7 @@ pub unsafe extern "C" fn sddpm_spline_build(
         non_null(hex, "hex mesh")?;
         non_null(out, "out")?;
         let h = &*hex;
-        let opts = spline_options(options.as_ref())?;
+        let opts = super::options::run_options(options).spline.unwrap_or_default();
         let surf = if surface.is_null() { h.surface.as_ref() } else { Some((*surface).mesh()) };
         let mut p = CProgress { callback: progress, user_data };
         let spline = build_spline(&h.mesh, surf, &opts, &mut p)?;

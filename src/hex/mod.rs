@@ -54,8 +54,9 @@ pub struct HexMesh {
 }
 
 impl HexMesh {
-    /// The unit cube [0, 1]^3 as one element (a fixture for tests and examples).
-    pub fn unit_cube() -> HexMesh {
+    /// The unit cube [0, 1]^3 as one element (a fixture of the unit tests).
+    #[cfg(test)]
+    pub(crate) fn unit_cube() -> HexMesh {
         let nodes = (0..8).map(|i: usize| [((i + 1) / 2 % 2) as f64, (i / 2 % 2) as f64, (i / 4) as f64]).collect();
         HexMesh { nodes, elements: vec![[0, 1, 2, 3, 4, 5, 6, 7]] }
     }

@@ -4,6 +4,7 @@
 //! folder of the main job (report.json, report.html and every file) is written by
 //! [`report`].
 
+pub mod options;
 pub mod report;
 
 use crate::context::{Constraints, Context};
@@ -95,7 +96,9 @@ use crate::spline::{build_spline, Spline, SplineOptions};
 use std::time::Instant;
 
 /// Options of [`run`]: one struct per stage, each with its documented defaults.
-#[derive(Debug, Clone, PartialEq)]
+/// Every scalar option also has a name ("hex.quality.pillow", [`options`]): the C
+/// API's options handle and the Python keyword arguments set them by name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunOptions {
     pub polycube: PolycubeOptions,
     pub auto: AutoOptions,
@@ -198,7 +201,7 @@ fn affine_of(f: impl Fn([f64; 3]) -> [f64; 3]) -> Affine {
 /// The hex stage's input for a diffused candidate: the user's surface in the
 /// candidate's normalised frame (alignment, then the candidate's box map, rotation
 /// included), the diffusion correspondence and the way back to user coordinates.
-pub fn hex_input(result: &PolycubeResult, cand: &Candidate, mesh: &TriMesh) -> Result<HexInput> {
+fn hex_input(result: &PolycubeResult, cand: &Candidate, mesh: &TriMesh) -> Result<HexInput> {
     let inp = cand
         .input
         .as_ref()
@@ -223,44 +226,66 @@ pub fn run(
     opts: &RunOptions,
     progress: &mut dyn Progress,
 ) -> Result<RunResult> {
-    // the hex options are checked before any work
-    opts.hex.validate()?;
+    // every option is checked before any work
+    opts.validate()?;
     let mut seconds = Vec::new();
     let t0 = Instant::now();
-    let (pr, auto, err) = {
+    let (mut pr, auto, err) = {
         let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
         generate_polycube(model, mesh, genus, request, &opts.polycube, &opts.auto, &mut sub)?
     };
     seconds.push(("polycube".to_string(), t0.elapsed().as_secs_f64()));
+    let hs = {
+        let mut sub = SubProgress { inner: progress, lo: 0.5, hi: 0.85 };
+        mesh_polycube(&mut pr, err, mesh, opts, &mut sub)?
+    };
+    let HexStage { candidate, attempts, verified, verification_error, hex } = hs;
+    seconds.push(("hex".to_string(), t0.elapsed().as_secs_f64() - seconds[0].1));
+    let spline = match &opts.spline {
+        Some(so) => {
+            let t2 = Instant::now();
+            let mut sub = SubProgress { inner: progress, lo: 0.85, hi: 1.0 };
+            let s = build_spline(&hex.mesh, Some(mesh), so, &mut sub)?;
+            seconds.push(("spline".to_string(), t2.elapsed().as_secs_f64()));
+            Some(s)
+        }
+        None => None,
+    };
+    check_progress(progress, 1.0, "done")?;
+    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, verified, verification_error, hex, spline, seconds })
+}
+
+/// What the hex stage of the main job made of a polycube result ([`mesh_polycube`]).
+pub struct HexStage {
+    /// Index (into the polycube's candidates) of the candidate whose mesh was kept
+    /// (for the grid-based fallback: the best polycube attempt's, or the first).
+    pub candidate: usize,
+    /// Every hex build, in order.
+    pub attempts: Vec<HexAttempt>,
+    /// False when the mesh does not come from a verified candidate's polycube.
+    pub verified: bool,
+    /// Why the mesh is not a verified polycube's (None when it is).
+    pub verification_error: Option<String>,
+    pub hex: HexResult,
+}
+
+/// The hex stage of the main job, shared by [`run`], the C API
+/// (sddpm_hex_mesh_build) and so the Python package: the candidates to mesh in
+/// their one order ([`hex_order`]), the best mesh of them and of the grid-based
+/// fallback ([`build_hex_for_polycube`]), and the checks of `opts.require_valid_hex`.
+/// `err` is the refusal [`generate_polycube`] returned with `pr`; the candidates
+/// the order lays out without diffusion are added to `pr`. Progress over 0-1.
+pub fn mesh_polycube(pr: &mut PolycubeResult, err: Option<Error>, mesh: &TriMesh, opts: &RunOptions, progress: &mut dyn Progress) -> Result<HexStage> {
+    opts.validate()?;
     let verification_error = err.as_ref().map(|e| e.to_string());
     let mut hex_opts = opts.hex.clone();
-    let mut order: Vec<usize>;
-    let mut pr = pr;
-    if let Some(e) = err {
-        if !(opts.accept_unverified && matches!(e, Error::VerificationFailed(_))) {
-            return Err(e);
-        }
-        // the diffused candidates by fit, then refused ones laid out without
-        // diffusion (the hex stage then works from the geometry alone)
-        order = fallback_order(&mut pr, mesh, &opts.polycube, genus, opts.hex_candidates.max(1));
-        if order.is_empty() {
-            return Err(e);
-        }
+    if err.is_some() {
+        // nothing verified: an unverified candidate's diffusion output is not a
+        // correspondence to seed the surface map with
         hex_opts.map.use_correspondence = false;
-    } else {
-        order = ranked_verified(&pr);
-        // verified candidates first; when their meshes fold, the unverified ones
-        // (by fit) get the remaining builds, as in a run where nothing verified
-        if opts.accept_unverified && order.len() < opts.hex_candidates.max(1) {
-            for i in fallback_order(&mut pr, mesh, &opts.polycube, genus, opts.hex_candidates.max(1)) {
-                if !order.contains(&i) {
-                    order.push(i);
-                }
-            }
-        }
     }
-    order.truncate(opts.hex_candidates.max(1));
-    let (candidate, attempts, hex) = build_hex_for_polycube(&pr, &order, mesh, &hex_opts, progress)?;
+    let order = hex_order(pr, err, opts)?;
+    let (candidate, attempts, hex) = build_hex_for_polycube(pr, &order, mesh, &hex_opts, progress)?;
     let voxel = !hex.from_polycube();
     let verified = !voxel && pr.candidates[candidate].stage == crate::search::generate::Stage::Verified;
     let verification_error = match (verified, verification_error) {
@@ -284,7 +309,6 @@ pub fn run(
             pr.candidates[candidate].context
         )),
     };
-    seconds.push(("hex".to_string(), t0.elapsed().as_secs_f64() - seconds[0].1));
     if opts.require_valid_hex && hex.quality.inverted > 0 {
         let bad: Vec<String> = hex.scaled_jacobian.iter().enumerate().filter(|(_, &q)| !(q > 0.0)).take(5).map(|(e, q)| format!("{e} ({q:.3})")).collect();
         return Err(Error::MeshingFailed(format!(
@@ -296,22 +320,50 @@ pub fn run(
             if verified { "" } else { " (unverified)" }
         )));
     }
-    let spline = match &opts.spline {
-        Some(so) => {
-            let t2 = Instant::now();
-            let mut sub = SubProgress { inner: progress, lo: 0.85, hi: 1.0 };
-            let s = build_spline(&hex.mesh, Some(mesh), so, &mut sub)?;
-            seconds.push(("spline".to_string(), t2.elapsed().as_secs_f64()));
-            Some(s)
+    Ok(HexStage { candidate, attempts, verified, verification_error, hex })
+}
+
+/// The candidates to mesh, best first, at most `opts.hex_candidates`: the verified
+/// ones ([`ranked_verified`]), then, with `opts.accept_unverified`, the unverified
+/// ones of [`fallback_order`] for the remaining builds. Without a verified
+/// candidate, `err` (the polycube's refusal) is returned unless
+/// `opts.accept_unverified` and it is a VERIFICATION_FAILED with something to mesh.
+pub fn hex_order(pr: &mut PolycubeResult, err: Option<Error>, opts: &RunOptions) -> Result<Vec<usize>> {
+    let k = opts.hex_candidates.max(1);
+    let mut order = match err {
+        Some(e) if !(opts.accept_unverified && matches!(e, Error::VerificationFailed(_))) => return Err(e),
+        Some(e) => {
+            // the diffused candidates by fit, then refused ones laid out without
+            // diffusion (the hex stage then works from the geometry alone)
+            let order = fallback_order(pr, &opts.polycube, k);
+            if order.is_empty() {
+                return Err(e);
+            }
+            order
         }
-        None => None,
+        None => {
+            let mut order = ranked_verified(pr);
+            // verified candidates first; when their meshes fold, the unverified ones
+            // (by fit) get the remaining builds, as in a run where nothing verified
+            if opts.accept_unverified && order.len() < k {
+                for i in fallback_order(pr, &opts.polycube, k) {
+                    if !order.contains(&i) {
+                        order.push(i);
+                    }
+                }
+            }
+            if order.is_empty() {
+                return Err(pr.accepted().err().unwrap_or_else(|| Error::VerificationFailed("no candidate to mesh".into())));
+            }
+            order
+        }
     };
-    check_progress(progress, 1.0, "done")?;
-    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, verified, verification_error, hex, spline, seconds })
+    order.truncate(k);
+    Ok(order)
 }
 
 /// Verified candidates, the chosen one first, then by score.
-pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
+fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
     let mut order: Vec<usize> = (0..pr.candidates.len()).filter(|&i| pr.candidates[i].stage == crate::search::generate::Stage::Verified).collect();
     order.sort_by(|&a, &b| {
         let sa = pr.candidates[a].score.unwrap_or(f64::INFINITY);
@@ -328,7 +380,7 @@ pub fn ranked_verified(pr: &PolycubeResult) -> Vec<usize> {
 /// The diffused candidates to mesh when none passed verification, best first: those
 /// that passed GOCC before those that failed it, then by the geometric fit of the
 /// input to the polycube.
-pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
+fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
     use crate::search::generate::Stage;
     let mut v: Vec<usize> = (0..pr.candidates.len())
         .filter(|&i| pr.candidates[i].input.is_some() && matches!(pr.candidates[i].stage, Stage::Tcv | Stage::Gocc | Stage::Verified))
@@ -341,28 +393,17 @@ pub fn fallback_candidates(pr: &PolycubeResult) -> Vec<usize> {
 }
 
 /// Lay out candidate `i`'s inference input without diffusion when it has none
-/// (refused by the pre-check); false when that fails. `prepared` holds the aligned,
-/// sampled input, computed on the first call and shared by the later ones.
-fn prepare_candidate_input(
-    pr: &mut PolycubeResult,
-    prepared: &mut Option<crate::search::generate::PreparedInput>,
-    mesh: &TriMesh,
-    opts: &PolycubeOptions,
-    i: usize,
-) -> bool {
+/// (refused by the pre-check), from the input samples the polycube result keeps;
+/// false when that fails.
+fn prepare_candidate_input(pr: &mut PolycubeResult, opts: &PolycubeOptions, i: usize) -> bool {
     if pr.candidates[i].input.is_some() {
         return true;
     }
-    if prepared.is_none() {
-        let Ok(p) = crate::search::generate::prepare_input(mesh, opts) else { return false };
-        *prepared = Some(p);
-    }
-    let Some(input) = prepared.as_ref() else { return false };
     let c = &pr.candidates[i];
     const RELAYOUT_SEED: u64 = 0x9e37;
     const RELAYOUT_STREAM: u64 = 0xfa11;
     let mut rng = crate::geometry::rng::seeded_rng(opts.seed ^ RELAYOUT_SEED, RELAYOUT_STREAM);
-    match crate::search::inference::prepare(&input.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
+    match crate::search::inference::prepare(&pr.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
         Ok(inp) => {
             pr.candidates[i].input = Some(inp);
             true
@@ -378,13 +419,13 @@ fn prepare_candidate_input(
 /// candidate is as good a start as a diffused one; this lets a plain shape whose fit
 /// the pre-check judged poor (a cube where the fit preferred a blind hole) still be
 /// meshed when the better-fitting ones fold.
-pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOptions, genus: i64, k: usize) -> Vec<usize> {
+fn fallback_order(pr: &mut PolycubeResult, opts: &PolycubeOptions, k: usize) -> Vec<usize> {
+    let genus = pr.input_genus;
     use crate::polycube::Primitive;
     let all_cube = |c: &crate::context::Context| c.occupied().all(|n| c.labels[n] == Primitive::Cube);
     // a genus-0 input without an all-cube candidate keeps one slot for it (below)
     let cube_slot = genus == 0 && k > 1 && !pr.candidates.iter().any(|c| all_cube(&c.context));
     let room = if cube_slot { k - 1 } else { k };
-    let mut prepared = None;
     let mut order = fallback_candidates(pr);
     order.truncate(room);
     if order.len() < room {
@@ -396,7 +437,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
             if order.len() >= room {
                 break;
             }
-            if prepare_candidate_input(pr, &mut prepared, mesh, opts, i) {
+            if prepare_candidate_input(pr, opts, i) {
                 order.push(i);
             }
         }
@@ -427,7 +468,7 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
                 c.output = None;
                 pr.candidates.push(c);
                 let i = pr.candidates.len() - 1;
-                if prepare_candidate_input(pr, &mut prepared, mesh, opts, i) {
+                if prepare_candidate_input(pr, opts, i) {
                     order.push(i);
                 } else {
                     pr.candidates.pop();
@@ -438,14 +479,17 @@ pub fn fallback_order(pr: &mut PolycubeResult, mesh: &TriMesh, opts: &PolycubeOp
     order
 }
 
+/// Where the grid-based fallback's share of the hex stage's progress starts.
+const FALLBACK_FROM: f64 = 5.0 / 7.0;
+
 /// Mesh the candidates `order` (indices into `pr.candidates`) and keep the best mesh
 /// by [`crate::hex::QualityGoals::rank`] (fewest inverted elements, then fewest
 /// missed goals, then highest minimum scaled Jacobian); stops early once a mesh meets
 /// every goal of `hex_opts.goals`. When the best polycube mesh still misses one (with
 /// a fixed `hex_opts.map.level`: when it keeps inverted elements), the grid-based
 /// fallback is also built (if `hex_opts.fallback.enabled`) and kept when it ranks
-/// better. Progress: 50-85 % of the caller's range.
-pub fn build_hex_for_polycube(
+/// better. Progress over 0-1: the candidates, then (from [`FALLBACK_FROM`]) the fallback.
+fn build_hex_for_polycube(
     pr: &PolycubeResult,
     order: &[usize],
     mesh: &TriMesh,
@@ -461,8 +505,8 @@ pub fn build_hex_for_polycube(
         let cand = &pr.candidates[ci];
         let input = hex_input(&pr, cand, mesh)?;
         let th = Instant::now();
-        let span = if hex_opts.fallback.enabled { 0.25 } else { 0.35 };
-        let mut sub = SubProgress { inner: progress, lo: 0.5 + span * k as f64 / n as f64, hi: 0.5 + span * (k + 1) as f64 / n as f64 };
+        let span = if hex_opts.fallback.enabled { FALLBACK_FROM } else { 1.0 };
+        let mut sub = SubProgress { inner: progress, lo: span * k as f64 / n as f64, hi: span * (k + 1) as f64 / n as f64 };
         let r = match build_hex_mesh(&input, hex_opts, &mut sub) {
             Ok(r) => r,
             Err(e @ Error::Cancelled(_)) => return Err(e),
@@ -486,7 +530,7 @@ pub fn build_hex_for_polycube(
     let short = best.as_ref().is_none_or(|(_, b)| if hex_opts.map.level.is_some() { b.quality.inverted > 0 } else { goals.missed(b) > 0 });
     if hex_opts.fallback.enabled && short {
         let th = Instant::now();
-        let mut sub = SubProgress { inner: progress, lo: 0.75, hi: 0.85 };
+        let mut sub = SubProgress { inner: progress, lo: FALLBACK_FROM, hi: 1.0 };
         let identity = Affine::similarity(1.0, [0.0; 3]);
         match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
             Ok(r) => {

@@ -4,7 +4,7 @@
 //! and its diffusion output with the surface correspondence.
 
 use super::inference::{occupancy_only, prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
-use super::verify::{chamfer, verify, VerificationReport, VerifyOptions};
+use super::verify::{verify, VerificationReport, VerifyOptions};
 use crate::context::Context;
 use crate::diffusion::Model;
 use crate::diffusion::sample::{reverse_diffusion, SamplerOptions};
@@ -686,17 +686,6 @@ fn visible_retry(model: &Model, cands: &mut [Candidate], idx: &[usize], opts: &P
     }
     timings.verification += t0.elapsed().as_secs_f64();
     Ok(())
-}
-
-/// Symmetric Chamfer distance between a candidate's output and its input samples.
-pub fn output_input_chamfer(c: &Candidate) -> Option<f64> {
-    let pairs = c.correspondence();
-    if pairs.is_empty() {
-        return None;
-    }
-    let a: Vec<[f64; 3]> = pairs.iter().map(|p| p.0).collect();
-    let b: Vec<[f64; 3]> = pairs.iter().map(|p| p.1).collect();
-    Some(chamfer(&a, &b))
 }
 
 /// User-guided mode with complete contexts (one or a stack). `input_genus` is the

@@ -1,9 +1,14 @@
 """libsddpm for Python: a thin ctypes layer over the library's C ABI.
 
-Objects (Mesh, Contexts, Model, Polycube, HexMesh, Spline) own their C handle and free it when
-collected (or explicitly with ``close()`` / a ``with`` block). Arrays go in and
+Objects (Options, Mesh, Contexts, Model, Polycube, HexMesh, Spline) own their C handle and
+free it when collected (or explicitly with ``close()`` / a ``with`` block). Arrays go in and
 come out as numpy arrays. Every failing call raises :class:`SddpmError` carrying
 the status number, its name and the library's message.
+
+Options are the library's named options ("hex.quality.pillow"; every one with its
+type, default and documentation: ``Options().describe()``), given to the build calls
+as keyword arguments with underscores for the dots (``hex_quality_pillow=False``), as
+a dict (``options={"hex.quality.pillow": False}``) or as an :class:`Options`.
 
 The shared library is found, in order, at ``$SDDPM_LIBRARY``, next to this
 package (an installed wheel), in ``target/release`` of the source tree this file
@@ -22,6 +27,7 @@ import numpy as np
 __all__ = [
     "work",
     "SddpmError",
+    "Options",
     "Mesh",
     "Contexts",
     "Model",
@@ -96,12 +102,6 @@ class ModelInfo(C.Structure):
                 ("trained_epochs", C.c_size_t), ("training_seed", C.c_uint64), ("final_loss", C.c_double)]
 
 
-class PolycubeOptions(C.Structure):
-    _fields_ = [("seed", C.c_uint64), ("sampler_steps", C.c_uint32), ("orientations", C.c_uint32), ("tau_cd", C.c_double),
-                ("max_in_empty_fraction", C.c_double), ("max_fit", C.c_double), ("auto_resolution", C.c_uint32),
-                ("neighbour_fit_ratio", C.c_double)]
-
-
 class Constraints(C.Structure):
     _fields_ = [("cube", C.c_int32), ("thc", C.c_int32), ("bhc", C.c_int32), ("per_label", C.c_int32 * 11),
                 ("allowed_mask", C.c_uint16), ("required_mask", C.c_uint16), ("genus", C.c_int64)]
@@ -112,28 +112,11 @@ class CandidateReport(C.Structure):
                 ("mean_target_pcd", C.c_double), ("score", C.c_double), ("chosen", C.c_bool)]
 
 
-class HexOptions(C.Structure):
-    _fields_ = [("level", C.c_int32), ("min_level", C.c_uint32), ("max_level", C.c_uint32), ("threshold", C.c_double),
-                ("max_elements", C.c_size_t), ("feature_angle", C.c_double), ("pillow", C.c_bool),
-                ("smooth_iterations", C.c_uint32), ("optimise_passes", C.c_uint32), ("optimise_target", C.c_double),
-                ("hex_candidates", C.c_uint32), ("accept_unverified", C.c_bool),
-                ("voxel_fallback", C.c_bool), ("voxel_resolution", C.c_uint32),
-                ("goal_min_scaled_jacobian", C.c_double), ("goal_mean_scaled_jacobian", C.c_double),
-                ("goal_hausdorff", C.c_double), ("voxel_refinements", C.c_uint32),
-                ("pin_uncovered", C.c_double), ("capture_features", C.c_bool), ("local_refinement", C.c_uint32),
-                ("feature_sheets", C.c_bool)]
-
-
 class HexQuality(C.Structure):
     _fields_ = [("elements", C.c_size_t), ("nodes", C.c_size_t), ("min_scaled_jacobian", C.c_double),
                 ("mean_scaled_jacobian", C.c_double), ("max_scaled_jacobian", C.c_double), ("inverted", C.c_size_t),
                 ("hausdorff_relative", C.c_double), ("level", C.c_int32), ("volume", C.c_double), ("input_volume", C.c_double),
                 ("verified_polycube", C.c_bool)]
-
-
-class SplineOptions(C.Structure):
-    _fields_ = [("sharp_angle_deg", C.c_double), ("boundary_enrichment", C.c_bool), ("interpolate_vertices", C.c_bool),
-                ("repair_jacobian", C.c_bool), ("fit", C.c_bool), ("sparse_bext", C.c_bool)]
 
 
 HEX_FORMATS = {"vtu": 0, "vtk": 1, "mesh": 2, "k": 3}
@@ -152,6 +135,16 @@ _SIGNATURES = {
     "sddpm_version_string": (C.c_char_p, []),
     "sddpm_status_name": (C.c_char_p, [C.c_int32]),
     "sddpm_last_error_message": (_S, [C.c_char_p, _SZ, C.POINTER(_SZ)]),
+    "sddpm_options_new": (_S, [C.POINTER(_P)]),
+    "sddpm_options_free": (None, [_P]),
+    "sddpm_options_set_number": (_S, [_P, C.c_char_p, C.c_double]),
+    "sddpm_options_set_bool": (_S, [_P, C.c_char_p, C.c_bool]),
+    "sddpm_options_set_string": (_S, [_P, C.c_char_p, C.c_char_p]),
+    "sddpm_options_unset": (_S, [_P, C.c_char_p]),
+    "sddpm_options_get_number": (_S, [_P, C.c_char_p, C.POINTER(C.c_double)]),
+    "sddpm_options_get_bool": (_S, [_P, C.c_char_p, C.POINTER(C.c_bool)]),
+    "sddpm_options_get_string": (_S, [_P, C.c_char_p, C.c_char_p, _SZ, C.POINTER(_SZ)]),
+    "sddpm_options_describe_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
     "sddpm_load_options_default": (_S, [C.POINTER(LoadOptions)]),
     "sddpm_mesh_load": (_S, [C.c_char_p, C.POINTER(LoadOptions), C.POINTER(_P)]),
     "sddpm_mesh_new_from_arrays": (_S, [_DP, _SZ, _U32P, _SZ, C.POINTER(LoadOptions), C.POINTER(_P)]),
@@ -179,8 +172,7 @@ _SIGNATURES = {
     "sddpm_model_new_from_bytes": (_S, [C.c_char_p, _SZ, C.POINTER(_P)]),
     "sddpm_model_free": (None, [_P]),
     "sddpm_model_get_info": (_S, [_P, C.POINTER(ModelInfo)]),
-    "sddpm_polycube_options_default": (_S, [C.POINTER(PolycubeOptions)]),
-    "sddpm_generate_polycube": (_S, [_P, _P, _P, C.POINTER(Constraints), _DP, C.POINTER(PolycubeOptions), PROGRESS, C.c_void_p, C.POINTER(_P)]),
+    "sddpm_generate_polycube": (_S, [_P, _P, _P, C.POINTER(Constraints), _DP, _P, PROGRESS, C.c_void_p, C.POINTER(_P)]),
     "sddpm_polycube_free": (None, [_P]),
     "sddpm_polycube_status": (_S, [_P]),
     "sddpm_polycube_labels": (_S, [_P, _I32P, _SZ]),
@@ -188,8 +180,7 @@ _SIGNATURES = {
     "sddpm_polycube_candidate": (_S, [_P, _SZ, C.POINTER(CandidateReport)]),
     "sddpm_polycube_report_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
     "sddpm_polycube_copy_points": (_S, [_P, _DP, _DP, _SZ]),
-    "sddpm_hex_options_default": (_S, [C.POINTER(HexOptions)]),
-    "sddpm_hex_mesh_build": (_S, [_P, C.POINTER(HexOptions), PROGRESS, C.c_void_p, C.POINTER(_P)]),
+    "sddpm_hex_mesh_build": (_S, [_P, _P, PROGRESS, C.c_void_p, C.POINTER(_P)]),
     "sddpm_hex_mesh_new_from_arrays": (_S, [_DP, _SZ, _U32P, _SZ, C.POINTER(_P)]),
     "sddpm_hex_mesh_free": (None, [_P]),
     "sddpm_hex_mesh_counts": (_S, [_P, C.POINTER(_SZ), C.POINTER(_SZ)]),
@@ -200,8 +191,7 @@ _SIGNATURES = {
     "sddpm_hex_mesh_quality": (_S, [_P, C.POINTER(HexQuality)]),
     "sddpm_hex_mesh_report_json": (_S, [_P, C.c_char_p, _SZ, C.POINTER(_SZ)]),
     "sddpm_hex_mesh_write": (_S, [_P, C.c_char_p, C.c_int32]),
-    "sddpm_spline_options_default": (_S, [C.POINTER(SplineOptions)]),
-    "sddpm_spline_build": (_S, [_P, _P, C.POINTER(SplineOptions), PROGRESS, C.c_void_p, C.POINTER(_P)]),
+    "sddpm_spline_build": (_S, [_P, _P, _P, PROGRESS, C.c_void_p, C.POINTER(_P)]),
     "sddpm_spline_free": (None, [_P]),
     "sddpm_spline_counts": (_S, [_P, C.POINTER(_SZ), C.POINTER(_SZ)]),
     "sddpm_spline_element_extraction": (_S, [_P, _SZ, _U32P, _DP, _SZ, C.POINTER(_SZ)]),
@@ -317,6 +307,93 @@ def _progress(fn: Optional[Callable[[float, str], bool]]):
             return 1
 
     return PROGRESS(call), box
+
+
+# ---------------------------------------------------------------- Options
+
+_UNDERSCORE_NAMES: Optional[dict] = None
+
+
+def _option_name(key: str) -> str:
+    """The library's name for a keyword: "hex_quality_pillow" -> "hex.quality.pillow"
+    (a name with dots, or one the library does not know, is passed on as it is)."""
+    global _UNDERSCORE_NAMES
+    if "." in key:
+        return key
+    if _UNDERSCORE_NAMES is None:
+        _UNDERSCORE_NAMES = {n.replace(".", "_"): n for n in Options().describe()}
+    return _UNDERSCORE_NAMES.get(key, key)
+
+
+class Options(_Handle):
+    """The library's options by name, each checked when set: an unknown name, a value
+    of another type or out of range raises SddpmError (INVALID_ARGUMENT, naming the
+    option) and leaves the options as they were.
+
+    ``Options({"hex.quality.pillow": False}, hex_map_level=2)``: a dict of names (dots or
+    underscores) and keyword arguments (underscores for the dots). A value of None
+    unsets an option that may be unset (e.g. ``hex_map_level=None``: the automatic level).
+    """
+
+    _free = "sddpm_options_free"
+
+    def __init__(self, options: Optional[dict] = None, **kwargs):
+        h = _P()
+        _check(load_library().sddpm_options_new(C.byref(h)))
+        super().__init__(h)
+        self.update(options, **kwargs)
+
+    def set(self, name: str, value) -> "Options":
+        lib = load_library()
+        n = _option_name(name).encode()
+        if value is None:
+            _check(lib.sddpm_options_unset(self.handle, n))
+        elif isinstance(value, (bool, np.bool_)):
+            _check(lib.sddpm_options_set_bool(self.handle, n, bool(value)))
+        elif isinstance(value, (int, float, np.integer, np.floating)):
+            _check(lib.sddpm_options_set_number(self.handle, n, float(value)))
+        elif isinstance(value, str):
+            _check(lib.sddpm_options_set_string(self.handle, n, value.encode()))
+        else:
+            raise SddpmError(1, f"option {name}: {type(value).__name__} is not a number, bool, string or None")
+        return self
+
+    def update(self, options=None, **kwargs) -> "Options":
+        """Set every option of ``options`` (a dict or another Options), then the keywords."""
+        if isinstance(options, Options):
+            options = {k: d["value"] for k, d in options.describe().items() if d["value"] != d["default"]}
+        for k, v in {**(options or {}), **kwargs}.items():
+            self.set(k, v)
+        return self
+
+    def get(self, name: str):
+        """The option's value (None when unset)."""
+        name = _option_name(name)
+        d = self.describe()
+        if name not in d:
+            # the library's refusal, naming it
+            _check(load_library().sddpm_options_get_number(self.handle, name.encode(), C.byref(C.c_double())))
+        return d[name]["value"]
+
+    def describe(self) -> dict:
+        """Every option: name -> {"default", "doc", "nullable", "type", "value"}."""
+        return _json(load_library().sddpm_options_describe_json, self.handle)
+
+    def __getitem__(self, name: str):
+        return self.get(name)
+
+    def __setitem__(self, name: str, value) -> None:
+        self.set(name, value)
+
+
+def _options(options, kwargs: dict, **named) -> Options:
+    """The options of a build call: ``options`` (dict or Options), the keywords, then
+    the call's own named arguments (those not None)."""
+    o = options if isinstance(options, Options) and not kwargs and all(v is None for v in named.values()) else Options(options, **kwargs)
+    for k, v in named.items():
+        if v is not None:
+            o.set(k, v)
+    return o
 
 
 # ---------------------------------------------------------------- Mesh
@@ -500,16 +577,15 @@ class Polycube(_Handle):
 
     @staticmethod
     def generate(model: Model, mesh: Mesh, contexts: Optional[Contexts] = None, ratios: Optional[Sequence[float]] = None,
-                 seed: int = 0, steps: Optional[int] = None, progress: Optional[Callable[[float, str], bool]] = None) -> "Polycube":
+                 seed: Optional[int] = None, steps: Optional[int] = None, progress: Optional[Callable[[float, str], bool]] = None,
+                 options=None, **kwargs) -> "Polycube":
         """Contexts given: user-guided; ratios given (7 numbers X1,X2,X3,Y1,Y2,Z1,Z2): automated
         on the full grid; neither: automated over every box. ``progress(fraction, stage)``
-        returning False cancels (SddpmError CANCELLED)."""
+        returning False cancels (SddpmError CANCELLED). ``seed`` sets the sampling and the
+        sampler seeds, ``steps`` the sampler's steps; other "polycube.*" / "auto.*"
+        options by keyword (``polycube_verify_tau_cd=0.02``) or ``options``."""
         lib = load_library()
-        o = PolycubeOptions()
-        _check(lib.sddpm_polycube_options_default(C.byref(o)))
-        o.seed = seed
-        if steps is not None:
-            o.sampler_steps = steps
+        o = _options(options, kwargs, **{"polycube.seed": seed, "polycube.sampler.seed": seed, "polycube.sampler.steps": steps})
         r = None
         if ratios is not None:
             if len(ratios) != 7:
@@ -518,7 +594,7 @@ class Polycube(_Handle):
         cb, box = _progress(progress)
         h = _P()
         st = lib.sddpm_generate_polycube(model.handle, mesh.handle, contexts.handle if contexts else None, None,
-                                         C.cast(r, _DP) if r is not None else None, C.byref(o), cb, None, C.byref(h))
+                                         C.cast(r, _DP) if r is not None else None, o.handle, cb, None, C.byref(h))
         pc = Polycube(h) if h else None
         if box["error"] is not None:
             raise box["error"]
@@ -586,24 +662,17 @@ class HexMesh(_Handle):
     _free = "sddpm_hex_mesh_free"
 
     @staticmethod
-    def build(polycube: Polycube, level: Optional[int] = None, accept_unverified: bool = True, hex_candidates: Optional[int] = None,
-              progress: Optional[Callable[[float, str], bool]] = None, **options) -> "HexMesh":
-        """From a polycube result; other sddpm_hex_options fields by keyword (e.g. pillow=False)."""
+    def build(polycube: Polycube, level: Optional[int] = None, accept_unverified: Optional[bool] = None, hex_candidates: Optional[int] = None,
+              progress: Optional[Callable[[float, str], bool]] = None, options=None, **kwargs) -> "HexMesh":
+        """From a polycube result, as the main job meshes it (its best candidates, the grid-based
+        fallback when none meets the quality goals). ``level`` fixes the octree level (None or -1:
+        automatic); other options by keyword (``hex_quality_pillow=False``) or ``options``."""
         lib = load_library()
-        o = HexOptions()
-        _check(lib.sddpm_hex_options_default(C.byref(o)))
-        if level is not None:
-            o.level = level
-        o.accept_unverified = accept_unverified
-        if hex_candidates is not None:
-            o.hex_candidates = hex_candidates
-        for k, v in options.items():
-            if k not in dict(HexOptions._fields_):
-                raise SddpmError(1, f"unknown hex option {k!r}")
-            setattr(o, k, v)
+        named = {"hex.map.level": level if level is not None and level >= 0 else None, "accept_unverified": accept_unverified, "hex_candidates": hex_candidates}
+        o = _options(options, kwargs, **named)
         cb, box = _progress(progress)
         h = _P()
-        st = lib.sddpm_hex_mesh_build(polycube.handle, C.byref(o), cb, None, C.byref(h))
+        st = lib.sddpm_hex_mesh_build(polycube.handle, o.handle, cb, None, C.byref(h))
         hm = HexMesh(h) if h else None
         if box["error"] is not None:
             raise box["error"]
@@ -670,17 +739,15 @@ class Spline(_Handle):
     _free = "sddpm_spline_free"
 
     @staticmethod
-    def build(hex_mesh: HexMesh, surface: Optional[Mesh] = None, progress: Optional[Callable[[float, str], bool]] = None, **options) -> "Spline":
+    def build(hex_mesh: HexMesh, surface: Optional[Mesh] = None, progress: Optional[Callable[[float, str], bool]] = None,
+              options=None, **kwargs) -> "Spline":
+        """Fitted to ``surface``, or to the surface the hex mesh was built for; "spline.*"
+        options by keyword (``spline_fit_enabled=False``) or ``options``."""
         lib = load_library()
-        o = SplineOptions()
-        _check(lib.sddpm_spline_options_default(C.byref(o)))
-        for k, v in options.items():
-            if k not in dict(SplineOptions._fields_):
-                raise SddpmError(1, f"unknown spline option {k!r}")
-            setattr(o, k, v)
+        o = _options(options, kwargs)
         cb, box = _progress(progress)
         h = _P()
-        st = lib.sddpm_spline_build(hex_mesh.handle, surface.handle if surface else None, C.byref(o), cb, None, C.byref(h))
+        st = lib.sddpm_spline_build(hex_mesh.handle, surface.handle if surface else None, o.handle, cb, None, C.byref(h))
         sp = Spline(h) if h else None
         if box["error"] is not None:
             raise box["error"]

@@ -11,22 +11,52 @@ DATA = pathlib.Path(__file__).resolve().parents[3] / "tests" / "data" / "meshes"
 
 
 def test_versions():
-    assert sddpm.abi_version() == 4
+    assert sddpm.abi_version() == 5
     assert sddpm.version().count(".") == 2
 
 
-def test_hex_options_layout_matches_the_library():
-    # ABI 2 appended voxel_refinements, pin_uncovered, capture_features, ABI 3
-    # local_refinement, ABI 4 feature_sheets: the library's defaults land in the
-    # fields ctypes declares
-    import ctypes
-
-    lib = sddpm.load_library()
-    o = sddpm.HexOptions()
-    assert lib.sddpm_hex_options_default(ctypes.byref(o)) == 0
-    assert (o.level, o.voxel_resolution, o.voxel_refinements) == (-1, 24, 2)
-    assert (o.goal_min_scaled_jacobian, o.goal_mean_scaled_jacobian, o.goal_hausdorff) == (0.3, 0.85, 0.01)
-    assert (o.pin_uncovered, o.capture_features, o.local_refinement, o.feature_sheets) == (0.0, True, 0, True)
+def test_options_by_name():
+    o = sddpm.Options()
+    d = o.describe()
+    # every option with its value, default, type and documentation; the keyword
+    # spelling (underscores for the dots) names each one once
+    assert len(d) > 90
+    assert all(set(v) == {"default", "doc", "nullable", "type", "value"} and v["doc"] for v in d.values())
+    assert len({n.replace(".", "_") for n in d}) == len(d)
+    assert d["hex.goals.hausdorff"] == {**d["hex.goals.hausdorff"], "default": 0.01, "type": "number", "value": 0.01}
+    assert d["hex.map.level"]["nullable"] and d["hex.map.level"]["value"] is None
+    for name, v in d.items():
+        assert o.get(name) == v["value"], name
+    # a number, a bool, a string, by name, keyword and dict; read back
+    o = sddpm.Options({"hex.quality.pillow": False}, hex_map_level=2, polycube_orientations="SignFlips")
+    o.set("hex.goals.hausdorff", 0.02)
+    o["hex_candidates"] = 2
+    assert (o.get("hex.quality.pillow"), o.get("hex_map_level"), o["polycube.orientations"]) == (False, 2, "SignFlips")
+    assert (o.get("hex.goals.hausdorff"), o.get("hex_candidates")) == (0.02, 2)
+    o.set("hex_map_level", None)  # back to the automatic level
+    assert o.get("hex.map.level") is None
+    # refusals name the option and leave the value as it was
+    with pytest.raises(sddpm.SddpmError) as e:
+        o.set("hex.quality.pilow", True)
+    assert e.value.name == "INVALID_ARGUMENT" and 'unknown option "hex.quality.pilow"' in e.value.message
+    with pytest.raises(sddpm.SddpmError) as e:
+        sddpm.Options(hex_quality_pilow=True)
+    assert 'unknown option "hex_quality_pilow"' in e.value.message
+    with pytest.raises(sddpm.SddpmError) as e:
+        o.set("hex.goals.hausdorff", -1)
+    assert e.value.name == "INVALID_ARGUMENT" and "option hex.goals.hausdorff must be" in e.value.message
+    with pytest.raises(sddpm.SddpmError) as e:
+        o.set("hex.fallback.resolution", 2.5)
+    assert "option hex.fallback.resolution must be a whole number" in e.value.message
+    with pytest.raises(sddpm.SddpmError) as e:
+        o.set("hex.quality.pillow", 1)
+    assert "option hex.quality.pillow is a bool option" in e.value.message
+    with pytest.raises(sddpm.SddpmError) as e:
+        o.set("polycube.orientations", "sideways")
+    assert "option polycube.orientations" in e.value.message
+    assert o.get("hex.goals.hausdorff") == 0.02
+    # another Options as the start of a build call's options
+    assert sddpm.Options(o).get("hex.quality.pillow") is False
 
 
 def test_mesh_load_check_and_arrays():
@@ -120,7 +150,10 @@ def test_whole_pipeline(tmp_path):
     model = sddpm.Model.embedded()
     mesh = sddpm.Mesh.load(DATA / "cgal_hole.off")
     pc = sddpm.Polycube.generate(model, mesh, sddpm.Contexts.parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0"), steps=10)
-    hexm = sddpm.HexMesh.build(pc, level=1)
+    with pytest.raises(sddpm.SddpmError) as e:
+        sddpm.HexMesh.build(pc, level=1, hex_fallback_resolution=1)
+    assert e.value.name == "INVALID_ARGUMENT" and "hex.fallback.resolution" in e.value.message
+    hexm = sddpm.HexMesh.build(pc, level=1, options={"hex.quality.pillow": True})
     q = hexm.quality()
     assert q["inverted"] == 0 and q["min_scaled_jacobian"] > 0.2 and q["hausdorff_relative"] < 0.01
     sj = hexm.scaled_jacobian
@@ -129,7 +162,7 @@ def test_whole_pipeline(tmp_path):
     assert hexm.elements.max() < hexm.nodes.shape[0]
     hexm.write(tmp_path / "hex.vtu")
     hexm.write(tmp_path / "hex.k")
-    sp = sddpm.Spline.build(hexm)
+    sp = sddpm.Spline.build(hexm, spline_sparse_bext=False)
     ne, nb = sp.counts()
     assert ne == q["elements"] and nb > 0
     ids, op = sp.extraction(0)
