@@ -6,9 +6,13 @@ use sddpm::export::bext::{parse_bext, read_bext, to_bext_string, write_bext, Bex
 use sddpm::export::lsdyna::{field, iga_deck_string, parse_deck, write_iga_deck, DeckOptions, IncludeStyle};
 use sddpm::export::spline_vtk::{spline_vtk_string, write_control_mesh_vtk, write_control_points_vtk};
 use sddpm::export::vtk::parse_vtk_legacy;
-use sddpm::spline::{build_spline, meshes, Spline, SplineOptions};
+use sddpm::spline::{build_spline, Spline, SplineOptions};
+
 use std::path::PathBuf;
 use tempfile::TempDir;
+
+#[path = "support/meshes.rs"]
+mod meshes;
 
 /// A directory of the test's own, removed with everything in it when the test ends.
 fn tmpdir() -> TempDir {

@@ -3,7 +3,10 @@
 //! unstructured mesh, agreement of the direct and iterative solvers.
 
 use sddpm::spline::iga::{solve_poisson, LinearSolver, PoissonOptions};
-use sddpm::spline::{meshes, Spline, SplineOptions};
+use sddpm::spline::{Spline, SplineOptions};
+
+#[path = "support/meshes.rs"]
+mod meshes;
 
 fn exact(x: [f64; 3]) -> f64 {
     (1.1 * x[0]).sin() * (0.7 * x[1] + 0.3).cos() * (0.9 * x[2]).exp()

@@ -3,7 +3,10 @@
 
 use sddpm::error::NoProgress;
 use sddpm::hex::HexMesh;
-use sddpm::spline::{build_spline, check, meshes, BasisKind, Spline, SplineOptions};
+use sddpm::spline::{build_spline, check, BasisKind, Spline, SplineOptions};
+
+#[path = "support/meshes.rs"]
+mod meshes;
 
 fn build(hex: &HexMesh, opts: &SplineOptions) -> Spline {
     build_spline(hex, None, opts, &mut NoProgress).expect("spline")

@@ -16,7 +16,6 @@ pub mod check;
 mod construct;
 pub mod fit;
 pub mod iga;
-pub mod meshes;
 pub mod nodes;
 mod refine;
 pub mod topology;

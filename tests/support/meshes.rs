@@ -1,7 +1,9 @@
-//! Small hex meshes built in code (for tests, benchmarks and studies) and the
-//! uniform 1-to-8 subdivision of a hex mesh.
+//! Small hex meshes built in code and the uniform 1-to-8 subdivision of a hex
+//! mesh: fixtures of the spline tests and benchmarks, which include this file
+//! (`#[path = "support/meshes.rs"] mod meshes;`); not part of the library.
+#![allow(dead_code)]
 
-use crate::hex::HexMesh;
+use sddpm::hex::HexMesh;
 use std::collections::HashMap;
 
 /// An nx x ny x nz block of unit-spaced hexes scaled to `size`, origin at 0.
@@ -112,7 +114,7 @@ pub fn extraordinary_edge(valence: usize, m: usize, layers: usize) -> HexMesh {
 /// Uniform subdivision: every hex into 8, new nodes at edge midpoints, face
 /// centres and element centres (trilinear positions).
 pub fn subdivide(hex: &HexMesh) -> HexMesh {
-    use super::topology::{vtk_of_bits, BITS_OF_VTK};
+    use sddpm::spline::topology::BITS_OF_VTK;
     let mut nodes = hex.nodes.clone();
     let mut cache: HashMap<Vec<u32>, u32> = HashMap::new();
     let mut elements = Vec::with_capacity(hex.elements.len() * 8);
@@ -152,7 +154,6 @@ pub fn subdivide(hex: &HexMesh) -> HexMesh {
         }
         for c in 0..8usize {
             let cb = BITS_OF_VTK[c];
-            let _ = vtk_of_bits;
             let mut ids = [0u32; 8];
             for (n, bits) in BITS_OF_VTK.iter().enumerate() {
                 ids[n] = lat[cb[2] + bits[2]][cb[1] + bits[1]][cb[0] + bits[0]];
