@@ -3,10 +3,14 @@
 //! generation ([`generate`]) and the automated, genus-guided mode ([`auto`]), the
 //! hierarchical verification of a diffusion output ([`verify`]), and the held-in
 //! synthetic cases ([`synthetic`]) on which the model and the search are measured
-//! ([`eval`]).
+//! ([`eval`]), an evaluation set of deformation families independent of them
+//! ([`evalset`]) and where the automated mode lost a part's true polycube
+//! ([`funnel`]).
 
 pub mod auto;
 pub mod eval;
+pub mod evalset;
+pub mod funnel;
 pub mod generate;
 pub mod inference;
 pub mod synthetic;
