@@ -116,12 +116,14 @@ impl Default for PolycubeOptions {
 impl PolycubeOptions {
     /// The options that go with the baseline generator, the closed-form template
     /// estimate ([`crate::diffusion::Model::template`]): its sampler
-    /// ([`SamplerOptions::template`]), TCV's coverage over the whole template (its
+    /// ([`SamplerOptions::template`]), its TCV threshold
+    /// ([`super::verify::TAU_CD_TEMPLATE`]), TCV's coverage over the whole template (its
     /// output carries the faces shared with neighbours), and the second diffusion
     /// with the visible prior for a candidate that fails.
     pub fn template() -> Self {
         let mut o = PolycubeOptions { sampler: SamplerOptions::template(), visible_retry: true, ..Default::default() };
         o.verify.visible_coverage = false;
+        o.verify.tau_cd = super::verify::TAU_CD_TEMPLATE;
         o
     }
 
