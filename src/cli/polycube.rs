@@ -16,7 +16,7 @@ use std::path::PathBuf;
 pub struct PolycubeArgs {
     /// Input surface (.obj, .stl, .off).
     pub mesh: PathBuf,
-    /// Output folder.
+    /// Output folder: absent or empty (a used one is refused unless --force).
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Weld tolerance relative to the bounding-box diagonal (negative: no welding;
@@ -82,6 +82,18 @@ pub struct PolycubeArgs {
     /// No progress on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `sddpm polycube`'s arguments: the polycube options and `--force`.
+#[derive(clap::Args, Debug)]
+pub struct PolycubeCommandArgs {
+    #[command(flatten)]
+    pub polycube: PolycubeArgs,
+    /// Write an output folder that is not empty: first remove the files sddpm writes
+    /// (report.json, polycube.obj, candidates.json, ...; other files are kept).
+    /// Without it a non-empty folder is refused.
+    #[arg(long)]
+    pub force: bool,
 }
 
 pub fn request_of(a: &PolycubeArgs) -> Result<ContextRequest> {
@@ -159,14 +171,15 @@ pub fn load_generator(a: &PolycubeArgs) -> Result<Model> {
     }
 }
 
-pub fn run(a: &PolycubeArgs) -> Result<i32> {
+pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
+    let a = &c.polycube;
     let t0 = std::time::Instant::now();
     let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh, a.weld_tolerance)?;
     let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(a)?;
     let model = load_generator(a)?;
     let opts = options_of(a)?;
-    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
+    super::common::prepare_output(&a.output, c.force)?;
     let quiet = a.quiet;
     let mut progress = super::common::progress_bar(quiet);
     let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &opts, &AutoOptions::default(), &mut progress)?;
@@ -176,6 +189,9 @@ pub fn run(a: &PolycubeArgs) -> Result<i32> {
         sddpm::export::obj::write_obj(&a.output.join("polycube.obj"), &obj, &format!("libsddpm polycube {} (user coordinates)", c.context))?;
     }
     let report = json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "command": super::common::command_line(),
+        "options": opts,
         "input": { "path": path, "vertices": mrep.vertices, "triangles": mrep.triangles, "genus": genus, "volume": mrep.volume },
         "polycube": {
             "labels": chosen.map(|c| c.labels.to_vec()),
