@@ -276,6 +276,18 @@ fn batch_meshes_a_folder_with_a_summary() {
     }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("| hole | OK | 1 |") && md.contains("INVALID_MESH"), "{md}");
+    // the used output folder is refused; --force clears the tool's files in it and
+    // in each input's folder (a file of the caller's stays) and meshes again
+    let batch = ["batch", inp.to_str().unwrap(), "-o", out.to_str().unwrap(), "--steps", "10", "--level", "1", "--no-spline", "-q"];
+    let (code, _, err) = sddpm(&batch);
+    assert_eq!(code, 2);
+    assert!(err.contains("not empty") && err.contains(out.to_str().unwrap()), "{err}");
+    std::fs::write(out.join("hole").join("mine.txt"), "kept").unwrap();
+    let args: Vec<&str> = batch.iter().copied().chain(["--force"]).collect();
+    let (code, _, err) = sddpm(&args);
+    assert_eq!(code, 2, "one file is still bad: {err}");
+    assert!(!err.contains("not empty"), "{err}");
+    assert!(out.join("hole").join("mine.txt").is_file() && out.join("hole").join("report.json").is_file() && out.join("summary.md").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -422,8 +434,16 @@ fn kernel_gate_accepts_a_negative_value_and_refuses_nan() {
     let (code, _, err) = sddpm(&args("-1"));
     assert!(!err.contains("unexpected argument"), "{err}");
     assert!(code == 0 || code == 2, "exit {code}: {err}");
+    // report.json lists the files written, itself included, with their sizes
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let files = report["files"].as_array().unwrap();
+    assert!(files.iter().any(|f| f["name"] == "candidates.json") && files.iter().any(|f| f["name"] == "report.json"), "{files:?}");
+    for f in files {
+        assert_eq!(f["bytes"].as_u64().unwrap(), std::fs::metadata(dir.join(f["name"].as_str().unwrap())).unwrap().len(), "{f}");
+    }
+    assert_eq!(report["version"], env!("CARGO_PKG_VERSION"));
     let (code, _, err) = sddpm(&args("NaN"));
     assert_eq!(code, 2);
-    assert!(err.contains("must be finite"), "{err}");
+    assert!(err.contains("kernel_gate") && err.contains("finite"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -179,16 +179,22 @@ pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
     let request = request_of(a)?;
     let model = load_generator(a)?;
     let opts = options_of(a)?;
+    // every option is checked before the folder is touched
+    sddpm::pipeline::RunOptions { polycube: opts.clone(), ..Default::default() }.validate()?;
     super::common::prepare_output(&a.output, c.force)?;
     let quiet = a.quiet;
     let mut progress = super::common::progress_bar(quiet);
     let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &opts, &AutoOptions::default(), &mut progress)?;
     let chosen = result.chosen.map(|i| &result.candidates[i]);
+    let mut written = Vec::new();
     if let Some(c) = chosen {
         let obj = to_user_polycube(&result, c);
         sddpm::export::obj::write_obj(&a.output.join("polycube.obj"), &obj, &format!("libsddpm polycube {} (user coordinates)", c.context))?;
+        written.push("polycube.obj");
     }
-    let report = json!({
+    write_json(&a.output.join("candidates.json"), &json!({ "candidates": result.candidates, "auto": auto }))?;
+    written.push("candidates.json");
+    let mut report = json!({
         "version": env!("CARGO_PKG_VERSION"),
         "command": super::common::command_line(),
         "options": opts,
@@ -196,6 +202,7 @@ pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
         "polycube": {
             "labels": chosen.map(|c| c.labels.to_vec()),
             "names": chosen.map(|c| c.context.names()),
+            "description": chosen.map(|c| c.context.describe()),
             "source": result.source,
             "generator": result.generator,
             "candidates": result.candidates.len(),
@@ -207,8 +214,8 @@ pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
         },
         "seconds": { "total": t0.elapsed().as_secs_f64(), "polycube": result.timings },
     });
-    write_json(&a.output.join("report.json"), &report)?;
-    write_json(&a.output.join("candidates.json"), &json!({ "candidates": result.candidates, "auto": auto }))?;
+    let text = sddpm::pipeline::report::json_with_manifest(&a.output, &written, &mut report)?;
+    std::fs::write(a.output.join("report.json"), text).map_err(|e| Error::io(a.output.join("report.json").display(), e))?;
     if a.json {
         println!("{report}");
     } else if !quiet {

@@ -86,6 +86,25 @@ pub fn clear_outputs(dir: &Path) -> Result<Vec<String>> {
     Ok(removed)
 }
 
+/// report.json's text for a command that wrote `names` into `dir`: `report` gets
+/// "files", the manifest of those files and of report.json itself, whose size is
+/// the size of the text returned (rendered until it holds).
+pub fn json_with_manifest(dir: &Path, names: &[&str], report: &mut Value) -> Result<String> {
+    let mut size = 0u64;
+    let mut text = String::new();
+    for _ in 0..8 {
+        let mut files: Vec<Value> = names.iter().map(|f| manifest_entry(dir, f)).collect();
+        files.push(json!({ "name": REPORT_JSON, "bytes": size, "what": describe_output(REPORT_JSON) }));
+        report["files"] = Value::Array(files);
+        text = serde_json::to_string_pretty(report).map_err(|e| Error::Internal(e.to_string()))?;
+        if text.len() as u64 == size {
+            break;
+        }
+        size = text.len() as u64;
+    }
+    Ok(text)
+}
+
 /// One entry of report.json's "files": a file this run wrote, its size and what it
 /// holds.
 fn manifest_entry(dir: &Path, name: &str) -> Value {
