@@ -223,20 +223,26 @@ pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) 
     let n = bars.len();
     let root = BitMapBackend::new(path, (WIDTH, (120 + 34 * n as u32).max(220))).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    // one bar per stage centred on its row (row n - 1 - i for bar i: the first on
+    // top), with a gap between bars; the label is the tick at the row's centre
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 24))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(150)
-        .build_cartesian_2d(0.0..xmax, (0..n).into_segmented())
+        .build_cartesian_2d(0.0..xmax, -0.5..n as f64 - 0.5)
         .map_err(|e| plot_err(path, e))?;
     chart
         .configure_mesh()
         .x_desc(xlabel)
         .y_labels(n)
-        .y_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) if *i < n => bars[n - 1 - *i].0.clone(),
-            _ => String::new(),
+        .y_label_formatter(&|v| {
+            let r = v.round();
+            if (v - r).abs() < 1e-6 && r >= 0.0 && (r as usize) < n {
+                bars[n - 1 - r as usize].0.clone()
+            } else {
+                String::new()
+            }
         })
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
@@ -245,8 +251,8 @@ pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) 
         .map_err(|e| plot_err(path, e))?;
     chart
         .draw_series(bars.iter().enumerate().map(|(i, (_, v))| {
-            let r = n - 1 - i;
-            Rectangle::new([(0.0, SegmentValue::Exact(r)), (*v, SegmentValue::Exact(r + 1))], RGBColor(60, 110, 180).filled())
+            let r = (n - 1 - i) as f64;
+            Rectangle::new([(0.0, r - 0.35), (*v, r + 0.35)], RGBColor(60, 110, 180).filled())
         }))
         .map_err(|e| plot_err(path, e))?;
     root.present().map_err(|e| plot_err(path, e))?;
