@@ -398,7 +398,8 @@ fn run_refuses_a_used_folder_unless_forced() {
 
 /// The torus at default options: the whole run folder stays under 40 MB (sparse
 /// BEXT within 1e-8, binary sampled VTK; 105 MB with dense exact BEXT and ASCII
-/// VTK) and its BEXT reads back with the project's reader.
+/// VTK) and its BEXT reads back with the project's reader with the extraction
+/// operators of an exact run within 1e-8.
 #[test]
 fn torus_run_folder_stays_compact() {
     let dir = std::env::temp_dir().join(format!("sddpm-cli-torus-size-{}", std::process::id()));
@@ -412,13 +413,19 @@ fn torus_run_folder_stays_compact() {
     let b = sddpm::export::bext::read_bext(&dir.join("spline.bext")).unwrap();
     assert_eq!(b.elements.len() as u64, report["spline"]["elements"].as_u64().unwrap());
     assert_eq!(b.nodes.len() as u64, report["spline"]["basis_functions"].as_u64().unwrap());
-    // each element's operator still sums to one per Bernstein coefficient
-    // (partition of unity) within its rows' tolerance
-    for el in &b.elements {
-        for k in 0..64 {
-            let sum: f64 = (0..el.ids.len()).map(|r| el.operator[r * 64 + k]).sum();
-            assert!((sum - 1.0).abs() <= 1e-8 * el.ids.len() as f64, "{sum}");
-        }
+    assert_eq!(report["spline"]["bext_sparse"], true);
+    assert_eq!(report["spline"]["bext_tolerance"], 1e-8);
+    // the same run with exact entries: the same ids and control points, every
+    // operator entry within the stated tolerance
+    let exact_dir = dir.join("exact");
+    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", exact_dir.to_str().unwrap(), "-q", "--bext-tolerance", "0"]);
+    assert_eq!(code, 0, "{err}");
+    let e = sddpm::export::bext::read_bext(&exact_dir.join("spline.bext")).unwrap();
+    assert_eq!(e.nodes, b.nodes);
+    assert_eq!(e.elements.len(), b.elements.len());
+    for (x, y) in e.elements.iter().zip(&b.elements) {
+        assert_eq!(x.ids, y.ids);
+        assert!(x.operator.iter().zip(&y.operator).all(|(u, v)| (u - v).abs() <= 1e-8));
     }
     eprintln!("torus run folder: {total} bytes: {sizes:?}");
     let _ = std::fs::remove_dir_all(&dir);
