@@ -86,8 +86,8 @@ pub struct SplineOptions {
 /// The default absolute tolerance of the operator entries in the run folder's
 /// spline.bext ([`SplineOptions::bext_tolerance`]): 1e-8, so each entry (a value in
 /// [0, 1]) is written with at most 8 decimals and reads back within 1e-8 of the
-/// computed one. A Bézier point Pb[k] = sum_r C[r][k] P[r] then moves by at most
-/// 1e-8 times the sum of |P[r]| over the element's functions (some 60 of them:
+/// computed one. A Bézier point `Pb[k] = sum_r C[r][k] P[r]` then moves by at most
+/// 1e-8 times the sum of `|P[r]|` over the element's functions (some 60 of them:
 /// below 1e-6 times the part's largest coordinate, orders below the spline's fit
 /// to the surface), and the file is about half the exact form's size (the torus of
 /// the test meshes: 34 MB sparse against 63 MB dense and exact).
