@@ -191,3 +191,63 @@ impl Progress for SubProgress<'_> {
         self.inner.report(f, stage)
     }
 }
+
+/// A progress sink that never goes backwards: each fraction passed on is the
+/// largest reported so far. Stages estimate their share ahead of time (the number
+/// of candidates to diffuse, of lattices to try) and a later estimate can fall
+/// below an earlier one; the caller sees the bar hold instead of going back.
+/// Cancel requests pass through. The main job ([`crate::pipeline::run`]) and the
+/// command line's progress bar report through one.
+pub struct MonotoneProgress<'a> {
+    inner: &'a mut dyn Progress,
+    best: f64,
+}
+
+impl<'a> MonotoneProgress<'a> {
+    pub fn new(inner: &'a mut dyn Progress) -> Self {
+        MonotoneProgress { inner, best: 0.0 }
+    }
+}
+
+impl Progress for MonotoneProgress<'_> {
+    fn report(&mut self, fraction: f64, stage: &str) -> bool {
+        // NaN is ignored (the last fraction is repeated)
+        if fraction > self.best {
+            self.best = fraction.min(1.0);
+        }
+        self.inner.report(self.best, stage)
+    }
+}
+
+#[cfg(test)]
+mod progress_tests {
+    use super::*;
+
+    /// Fractions that go back (a sub-stage re-estimating its share) reach the
+    /// caller as the largest so far, through nested sub-ranges too; cancel passes.
+    #[test]
+    fn monotone_progress_never_goes_backwards() {
+        let mut seen: Vec<f64> = Vec::new();
+        let mut sink = |f: f64, _: &str| {
+            seen.push(f);
+            true
+        };
+        {
+            let mut m = MonotoneProgress::new(&mut sink);
+            let mut sub = SubProgress { inner: &mut m, lo: 0.0, hi: 0.5 };
+            for f in [0.1, 0.76, 0.66, 0.8, f64::NAN, 0.2, 1.0] {
+                assert!(sub.report(f, "reverse diffusion"));
+            }
+            let mut sub2 = SubProgress { inner: &mut m, lo: 0.3, hi: 1.0 };
+            for f in [0.0, 0.5, 0.4, 2.0] {
+                assert!(sub2.report(f, "hex"));
+            }
+        }
+        assert!(seen.windows(2).all(|w| w[1] >= w[0]), "{seen:?}");
+        assert_eq!(seen[..3], [0.05, 0.38, 0.38]);
+        assert_eq!(*seen.last().unwrap(), 1.0);
+        let mut cancel = |_: f64, _: &str| false;
+        let mut m = MonotoneProgress::new(&mut cancel);
+        assert!(!m.report(0.5, "x"));
+    }
+}

@@ -99,9 +99,18 @@ fn run_writes_the_whole_run_folder() {
     assert!(v["hex"]["hausdorff_relative"].as_f64().unwrap() < 0.01);
     assert_eq!(v["spline"]["elements"], v["hex"]["elements"]);
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    for needle in ["<img src=\"scaled_jacobian.png\"", "<img src=\"hex.png\"", "min scaled Jacobian", "THC+Z"] {
+    for needle in ["<img src=\"scaled_jacobian.png\"", "<img src=\"hex.png\"", "min scaled Jacobian", "THC+Z at (0,0,0)", "Mesh made by: polycube", "goal-pass", "irregular edges", "Provenance"] {
         assert!(html.contains(needle), "report.html lacks {needle}");
     }
+    assert!(!html.contains("THC+Z,null"), "contexts are readable");
+    // provenance: version, command line, options
+    assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
+    assert!(v["command"].as_str().unwrap().contains("run tests/data/meshes/cgal_hole.off"), "{}", v["command"]);
+    assert_eq!(v["options"]["hex_candidates"], 4);
+    assert_eq!(v["options"]["spline"]["sparse_bext"], true);
+    assert_eq!(v["mesh_path"]["from"], "polycube");
+    assert_eq!(v["hex"]["goals"].as_array().unwrap().len(), 4);
+    assert!(v["hex"]["irregular_edges"].is_u64());
     // hex.k is a keyword deck with as many elements as the report says
     let k = std::fs::read_to_string(dir.join("hex.k")).unwrap();
     assert!(k.contains("*NODE") && k.contains("*ELEMENT_SOLID") && k.trim_end().ends_with("*END"));
@@ -119,7 +128,7 @@ fn run_takes_the_fallback_options() {
     let d = dir.to_str().unwrap();
     // the last run's report.json
     let last_report = || -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap() };
-    let common = ["run", "tests/data/meshes/hexgen_hepta.obj", "-o", d, "--labels", "cube,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--no-spline", "--json", "-q"];
+    let common = ["run", "tests/data/meshes/hexgen_hepta.obj", "-o", d, "--labels", "cube,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--no-spline", "--json", "-q", "--force"];
     // a looser distance goal (2.5 %) that the first lattice meets: no finer one
     // follows (the default goal, 1 %, refines it; hepta at 12 voxels with the
     // coverage step is 1.5-1.9 % away)
@@ -141,6 +150,14 @@ fn run_takes_the_fallback_options() {
     assert!(elements <= 1.5 * hexgen.elements.len() as f64, "{elements} against {}", hexgen.elements.len());
     assert!(v["hex"]["min_scaled_jacobian"].as_f64().unwrap() >= hexgen_min, "{}", v["hex"]);
     let report = last_report();
+    // the report says the fallback made the mesh, and does not lead with the unused polycube
+    assert_eq!(report["mesh_path"]["from"], "grid-based fallback", "{}", report["mesh_path"]);
+    assert!(report["mesh_path"]["why"].as_str().unwrap().contains("grid-based fallback"), "{}", report["mesh_path"]);
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(html.contains("Mesh made by: grid-based fallback") && html.contains("lattice voxel 12"), "report.html lacks the path");
+    assert!(html.contains("Polycube (not used for the mesh)") && !html.contains("Unverified polycube"));
+    assert!(html.find("Polycube (not used").unwrap() > html.find("<h2>Hex mesh</h2>").unwrap(), "the unused polycube comes after the mesh");
+    assert!(html.contains("&#10004; met"), "goal marks");
     // the 12-voxel lattice, then again with its planes on the input's faces
     // (hepta's base, ledge, top and flat side; 3.5 % away there: not kept)
     let meshed = report["hex"]["stages"][0]["details"]["lattices_meshed"].as_array().unwrap();
@@ -259,6 +276,18 @@ fn batch_meshes_a_folder_with_a_summary() {
     }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("| hole | OK | 1 |") && md.contains("INVALID_MESH"), "{md}");
+    // the used output folder is refused; --force clears the tool's files in it and
+    // in each input's folder (a file of the caller's stays) and meshes again
+    let batch = ["batch", inp.to_str().unwrap(), "-o", out.to_str().unwrap(), "--steps", "10", "--level", "1", "--no-spline", "-q"];
+    let (code, _, err) = sddpm(&batch);
+    assert_eq!(code, 2);
+    assert!(err.contains("not empty") && err.contains(out.to_str().unwrap()), "{err}");
+    std::fs::write(out.join("hole").join("mine.txt"), "kept").unwrap();
+    let args: Vec<&str> = batch.iter().copied().chain(["--force"]).collect();
+    let (code, _, err) = sddpm(&args);
+    assert_eq!(code, 2, "one file is still bad: {err}");
+    assert!(!err.contains("not empty"), "{err}");
+    assert!(out.join("hole").join("mine.txt").is_file() && out.join("hole").join("report.json").is_file() && out.join("summary.md").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -297,6 +326,108 @@ fn report_html_renders_in_headless_chromium() {
     }
     assert!(non_white > 0.05, "the page looks blank: {:.1}% non-white", 100.0 * non_white);
     assert!(colours.len() > 50, "only {} colours: the pictures did not load", colours.len());
+    // the page as Chromium rendered it names the path and marks every goal, for a
+    // polycube mesh and for a fallback mesh
+    let rendered = |url: &str| {
+        let out = Command::new(chromium).args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"]).arg(url).output().expect("run chromium");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let marks = |dom: &str| dom.matches("goal-pass").count() + dom.matches("goal-fail").count();
+    let dom = rendered(&url);
+    assert!(dom.contains("Mesh made by: polycube") && dom.contains("THC+Z at (0,0,0)"), "no path in the rendered page");
+    assert_eq!(marks(&dom), 4, "a mark per goal");
+    let fb = dir.join("fallback");
+    let (code, _, err) = sddpm(&[
+        "run", "tests/data/meshes/hexgen_hepta.obj", "-o", fb.to_str().unwrap(), "--labels", "cube,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--no-spline",
+        "--voxel-resolution", "12", "--voxel-refinements", "0", "--goal-hausdorff", "0.025", "-q",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let dom = rendered(&format!("file://{}", fb.join("report.html").display()));
+    assert!(dom.contains("Mesh made by: grid-based fallback"), "no fallback path in the rendered page");
+    assert_eq!(marks(&dom), 4, "a mark per goal");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A used output folder is refused (exit 2, naming the folder) unless --force,
+/// which removes the files of the earlier run (a run with the spline, then one
+/// without: no spline file is left) and keeps the caller's; report.json's
+/// manifest lists exactly the files of the run, with their sizes, and report.html
+/// links those.
+#[test]
+fn run_refuses_a_used_folder_unless_forced() {
+    let dir = std::env::temp_dir().join(format!("sddpm-cli-force-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let base = ["run", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "-q"];
+    let (code, _, err) = sddpm(&base);
+    assert_eq!(code, 0, "{err}");
+    for f in ["spline.bext", "model.k", "spline.vtk", "spline_control.vtk"] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    let (code, _, err) = sddpm(&base);
+    assert_eq!(code, 2, "a used folder is refused: {err}");
+    assert!(err.starts_with("error: ") && err.contains(d) && err.contains("--force"), "{err}");
+    std::fs::write(dir.join("notes.txt"), "the caller's file").unwrap();
+    let args: Vec<&str> = base.iter().copied().chain(["--force", "--no-spline"]).collect();
+    let (code, _, err) = sddpm(&args);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "the caller's file", "--force keeps other files");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let files = report["files"].as_array().unwrap();
+    let listed: std::collections::BTreeSet<String> = files.iter().map(|f| f["name"].as_str().unwrap().to_string()).collect();
+    let present: std::collections::BTreeSet<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n != "notes.txt").collect();
+    assert_eq!(listed, present, "no file of the first run is left that the second did not write");
+    for f in ["spline.bext", "model.k", "spline.vtk", "spline_control.vtk"] {
+        assert!(!dir.join(f).exists(), "{f} of the first run is left");
+    }
+    for f in files {
+        let name = f["name"].as_str().unwrap();
+        assert_eq!(f["bytes"].as_u64().unwrap(), std::fs::metadata(dir.join(name)).unwrap().len(), "size of {name}");
+        assert!(!f["what"].as_str().unwrap().is_empty(), "{name}");
+    }
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let links: std::collections::BTreeSet<String> = html.split("<a href=\"").skip(1).map(|t| t[..t.find('"').unwrap()].to_string()).collect();
+    assert_eq!(links, listed, "report.html links the files of the run");
+    // `sddpm polycube` refuses the folder too
+    let (code, _, err) = sddpm(&["polycube", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "2", "-q"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("not empty"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The torus at default options: the whole run folder stays under 40 MB (sparse
+/// BEXT within 1e-8, binary sampled VTK; 105 MB with dense exact BEXT and ASCII
+/// VTK) and its BEXT reads back with the project's reader with the extraction
+/// operators of an exact run within 1e-8.
+#[test]
+fn torus_run_folder_stays_compact() {
+    let dir = std::env::temp_dir().join(format!("sddpm-cli-torus-size-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", dir.to_str().unwrap(), "-q"]);
+    assert_eq!(code, 0, "{err}");
+    let total: u64 = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().metadata().unwrap().len()).sum();
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let sizes: Vec<String> = report["files"].as_array().unwrap().iter().map(|f| format!("{} {}", f["name"], f["bytes"])).collect();
+    assert!(total < 40_000_000, "{total} bytes: {sizes:?}");
+    let b = sddpm::export::bext::read_bext(&dir.join("spline.bext")).unwrap();
+    assert_eq!(b.elements.len() as u64, report["spline"]["elements"].as_u64().unwrap());
+    assert_eq!(b.nodes.len() as u64, report["spline"]["basis_functions"].as_u64().unwrap());
+    assert_eq!(report["spline"]["bext_sparse"], true);
+    assert_eq!(report["spline"]["bext_tolerance"], 1e-8);
+    // the same run with exact entries: the same ids and control points, every
+    // operator entry within the stated tolerance
+    let exact_dir = dir.join("exact");
+    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", exact_dir.to_str().unwrap(), "-q", "--bext-tolerance", "0"]);
+    assert_eq!(code, 0, "{err}");
+    let e = sddpm::export::bext::read_bext(&exact_dir.join("spline.bext")).unwrap();
+    assert_eq!(e.nodes, b.nodes);
+    assert_eq!(e.elements.len(), b.elements.len());
+    for (x, y) in e.elements.iter().zip(&b.elements) {
+        assert_eq!(x.ids, y.ids);
+        assert!(x.operator.iter().zip(&y.operator).all(|(u, v)| (u - v).abs() <= 1e-8));
+    }
+    eprintln!("torus run folder: {total} bytes: {sizes:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -306,12 +437,20 @@ fn report_html_renders_in_headless_chromium() {
 fn kernel_gate_accepts_a_negative_value_and_refuses_nan() {
     let dir = std::env::temp_dir().join(format!("sddpm-cli-gate-{}", std::process::id()));
     let d = dir.to_str().unwrap();
-    let args = |g: &'static str| ["polycube", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "2", "-q", "--kernel-gate", g];
+    let args = |g: &'static str| ["polycube", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "2", "-q", "--force", "--kernel-gate", g];
     let (code, _, err) = sddpm(&args("-1"));
     assert!(!err.contains("unexpected argument"), "{err}");
     assert!(code == 0 || code == 2, "exit {code}: {err}");
+    // report.json lists the files written, itself included, with their sizes
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let files = report["files"].as_array().unwrap();
+    assert!(files.iter().any(|f| f["name"] == "candidates.json") && files.iter().any(|f| f["name"] == "report.json"), "{files:?}");
+    for f in files {
+        assert_eq!(f["bytes"].as_u64().unwrap(), std::fs::metadata(dir.join(f["name"].as_str().unwrap())).unwrap().len(), "{f}");
+    }
+    assert_eq!(report["version"], env!("CARGO_PKG_VERSION"));
     let (code, _, err) = sddpm(&args("NaN"));
     assert_eq!(code, 2);
-    assert!(err.contains("must be finite"), "{err}");
+    assert!(err.contains("kernel_gate") && err.contains("finite"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -207,6 +207,15 @@ fn hex_and_spline_handles_contract() {
         let mut counts = [0usize; 4];
         assert_eq!(sddpm_hex_mesh_histogram(h, counts.as_mut_ptr(), 4), Status::Ok);
         assert_eq!(counts, [0, 0, 0, 1]);
+        // the report of a mesh from arrays counts its irregular edges as
+        // report.json does (the twelve edges of one cube, each on one element)
+        let mut need = 0usize;
+        assert_eq!(sddpm_hex_mesh_report_json(h, null_mut(), 0, &mut need), Status::BufferTooSmall);
+        let mut buf = vec![0 as std::os::raw::c_char; need];
+        assert_eq!(sddpm_hex_mesh_report_json(h, buf.as_mut_ptr(), need, null_mut()), Status::Ok);
+        let rep: serde_json::Value = serde_json::from_str(std::ffi::CStr::from_ptr(buf.as_ptr()).to_str().unwrap()).unwrap();
+        assert_eq!(rep["irregular_edges"], 12, "{rep}");
+        assert_eq!(rep["irregular_edges_boundary"], 12, "{rep}");
         let dir = std::env::temp_dir().join(format!("sddpm-ffi-hex-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = CString::new(dir.join("cube.k").to_str().unwrap()).unwrap();

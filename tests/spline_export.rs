@@ -196,6 +196,73 @@ fn spline_lsdyna_deck_matches_manual_layout() {
     assert!(legacy.contains("*INCLUDE_TRANSFORM\nrod.bext\n1,0,1,0,0\n"));
 }
 
+/// The binary sampled VTK holds the ASCII one's points (as 32-bit floats) and its
+/// cells, in the sections of the legacy format.
+#[test]
+fn spline_vtk_binary_matches_the_ascii_form() {
+    let sp = refined_spline();
+    let ascii = parse_vtk_legacy(&spline_vtk_string(&sp, 2).unwrap()).unwrap();
+    let b = sddpm::export::spline_vtk::spline_vtk_binary(&sp, 2).unwrap();
+    let npts = ascii.nodes.len();
+    let head = format!("BINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS {npts} float\n");
+    let at = b.windows(head.len()).position(|w| w == head.as_bytes()).expect("the header") + head.len();
+    for (n, p) in ascii.nodes.iter().enumerate() {
+        for i in 0..3 {
+            let o = at + 12 * n + 4 * i;
+            let v = f32::from_be_bytes(b[o..o + 4].try_into().unwrap()) as f64;
+            assert!((v - p[i]).abs() <= 1e-6 * (1.0 + p[i].abs()), "point {n}");
+        }
+    }
+    let cells = format!("\nCELLS {} {}\n", ascii.elements.len(), 9 * ascii.elements.len());
+    let at = b.windows(cells.len()).position(|w| w == cells.as_bytes()).expect("the cells") + cells.len();
+    for (c, el) in ascii.elements.iter().enumerate() {
+        let o = at + 36 * c;
+        assert_eq!(i32::from_be_bytes(b[o..o + 4].try_into().unwrap()), 8);
+        for (k, &v) in el.iter().enumerate() {
+            assert_eq!(i32::from_be_bytes(b[o + 4 + 4 * k..o + 8 + 4 * k].try_into().unwrap()) as usize, v as usize, "cell {c}");
+        }
+    }
+    for section in ["CELL_TYPES", "SCALARS element int 1", "SCALARS level int 1", "SCALARS jacobian float 1", "SCALARS scaled_jacobian float 1"] {
+        assert!(b.windows(section.len()).any(|w| w == section.as_bytes()), "{section}");
+    }
+}
+
+/// BEXT written within a tolerance (the run folder's form: sparse, operator
+/// entries within 1e-8) reads back with the project's reader with the same basis
+/// ids, exact control points and every operator entry within the tolerance; the
+/// Bézier points move by at most the tolerance times the control points' sizes.
+#[test]
+fn spline_bext_within_a_tolerance_reads_back() {
+    let sp = refined_spline();
+    let exact = Bext::from_spline(&sp);
+    let tol = sddpm::export::bext::RUN_FOLDER_TOLERANCE;
+    assert_eq!(tol, 1e-8);
+    assert_eq!(tol, SplineOptions::default().bext_tolerance);
+    let d = tmpdir();
+    let path = d.path().join("t.bext");
+    sddpm::export::bext::write_bext_within(&path, &sp, true, tol).unwrap();
+    let b = read_bext(&path).unwrap();
+    assert_eq!(b.nodes, exact.nodes);
+    assert_eq!(b.elements.len(), exact.elements.len());
+    for (e, (x, y)) in exact.elements.iter().zip(&b.elements).enumerate() {
+        assert_eq!(x.ids, y.ids, "element {e}");
+        for (k, (u, v)) in x.operator.iter().zip(&y.operator).enumerate() {
+            assert!((u - v).abs() <= tol, "element {e} entry {k}: {u} against {v}");
+        }
+        let size: f64 = x.ids.iter().map(|&i| exact.nodes[i as usize][..3].iter().map(|c| c * c).sum::<f64>().sqrt()).sum();
+        for (p, q) in exact.bezier_points(e).iter().zip(b.bezier_points(e)) {
+            for i in 0..3 {
+                assert!((p[i] - q[i]).abs() <= tol * size + 1e-12, "element {e}");
+            }
+        }
+    }
+    let exact_len = to_bext_string(&sp, false).len();
+    let len = std::fs::metadata(&path).unwrap().len() as usize;
+    assert!(len < exact_len, "{len} against {exact_len}");
+    // tolerance 0 is the exact form
+    assert_eq!(sddpm::export::bext::bext_text_within(&exact, true, 0.0), to_bext_string(&sp, true));
+}
+
 #[test]
 fn spline_vtk_exports() {
     let sp = refined_spline();

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 pub struct BatchArgs {
     /// Folder of .obj / .stl / .off files (not recursive).
     pub dir: PathBuf,
-    /// Output folder: one run folder per input plus summary.md and summary.json.
+    /// Output folder: one run folder per input plus summary.md and summary.json; absent or empty (a used one is refused unless --force).
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Files meshed at once (default: the number of cores).
@@ -37,6 +37,13 @@ pub struct BatchArgs {
     /// Model weights (default: the embedded model).
     #[arg(long)]
     pub weights: Option<PathBuf>,
+    /// Write an output folder that is not empty: first remove the files sddpm writes
+    /// there and in each input's run folder (other files are kept). Without it a
+    /// non-empty folder is refused.
+    #[arg(long)]
+    pub force: bool,
+    #[command(flatten)]
+    pub spline_files: super::run::SplineFileArgs,
     /// Print the summary as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -47,12 +54,12 @@ pub struct BatchArgs {
     pub hex: super::run::HexArgs,
 }
 
-fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions) -> Result<Value> {
+fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions, command: &str) -> Result<Value> {
     let t0 = std::time::Instant::now();
     let Loaded { mesh, report, path } = load_checked(file, sddpm::mesh::DEFAULT_WELD_TOLERANCE)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let r = run_job(model, &mesh, genus, &ContextRequest::Auto, opts, &mut NoProgress)?;
-    write_run_folder(out, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())
+    write_run_folder(out, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(command) }, &r, t0.elapsed().as_secs_f64())
 }
 
 pub fn run(a: &BatchArgs) -> Result<i32> {
@@ -68,7 +75,6 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
     if files.is_empty() {
         return Err(Error::InvalidArgument(format!("{}: no .obj, .stl or .off file", a.dir.display())));
     }
-    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
     let model = load_model(&a.weights)?;
     opts.polycube.seed = a.seed;
     opts.polycube.sampler.seed = a.seed;
@@ -80,6 +86,19 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
     if a.no_spline {
         opts.spline = None;
     }
+    super::run::spline_file_options(&a.spline_files, &mut opts)?;
+    opts.validate()?;
+    super::common::prepare_output(&a.output, a.force)?;
+    if a.force {
+        // each input's run folder: the tool's files go, the caller's stay
+        for f in &files {
+            let sub = a.output.join(f.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh"));
+            if sub.is_dir() {
+                sddpm::pipeline::report::clear_outputs(&sub)?;
+            }
+        }
+    }
+    let command = super::common::command_line();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs.unwrap_or(0))
         .build()
@@ -90,7 +109,7 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
             .map(|f| {
                 let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_string();
                 let t = std::time::Instant::now();
-                let r = one(&model, f, &a.output.join(&stem), &opts);
+                let r = one(&model, f, &a.output.join(&stem), &opts, &command);
                 let secs = t.elapsed().as_secs_f64();
                 let row = match &r {
                     Ok(j) => json!({

@@ -34,7 +34,13 @@ pub fn progress_bar(quiet: bool) -> impl FnMut(f64, &str) -> bool {
     if let Some(b) = &bar {
         b.set_style(indicatif::ProgressStyle::with_template("{msg:>22} [{bar:40}] {percent:>3}% {elapsed}").unwrap().progress_chars("=> "));
     }
+    // the bar never goes back (the library's stages may re-estimate their share)
+    let mut best = 0.0f64;
     move |f: f64, stage: &str| {
+        if f > best {
+            best = f.min(1.0);
+        }
+        let f = best;
         if let Some(b) = &bar {
             b.set_message(stage.to_string());
             b.set_position((f * 1000.0) as u64);
@@ -49,4 +55,43 @@ pub fn progress_bar(quiet: bool) -> impl FnMut(f64, &str) -> bool {
 /// The chosen polycube's surface in the user's coordinates.
 pub fn to_user_polycube(result: &PolycubeResult, c: &Candidate) -> TriMesh {
     sddpm::pipeline::polycube_user_mesh(result, c)
+}
+
+/// The command line as typed (arguments with spaces or quotes single-quoted), for
+/// report.json's "command".
+pub fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@%".contains(c)) {
+                a
+            } else {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Make `dir` ready for a command's files: a folder that does not exist or is
+/// empty is used as it is; a non-empty one is refused (so that no file of another
+/// run is mixed with this run's, and nothing the caller owns is overwritten)
+/// unless `force`, which removes the files the tool writes there
+/// (`pipeline::report::OUTPUT_FILES`, only those names) and keeps the rest.
+pub fn prepare_output(dir: &Path, force: bool) -> Result<()> {
+    let entries = sddpm::pipeline::report::folder_entries(dir)?;
+    if !entries.is_empty() {
+        if !force {
+            let shown: Vec<&str> = entries.iter().take(4).map(|s| s.as_str()).collect();
+            return Err(Error::InvalidArgument(format!(
+                "the output folder {} is not empty ({} entr{}: {}{}); choose a new or empty folder, or pass --force to replace the files sddpm writes there (other files are kept)",
+                dir.display(),
+                entries.len(),
+                if entries.len() == 1 { "y" } else { "ies" },
+                shown.join(", "),
+                if entries.len() > shown.len() { ", ..." } else { "" }
+            )));
+        }
+        sddpm::pipeline::report::clear_outputs(dir)?;
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))
 }

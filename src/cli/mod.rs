@@ -34,7 +34,7 @@ pub enum Command {
     /// Write the training set (tensors, contexts, a few assemblies as OBJ).
     Dataset(dataset::DatasetArgs),
     /// Generate and verify a polycube for a mesh (user-guided or automated).
-    Polycube(polycube::PolycubeArgs),
+    Polycube(polycube::PolycubeCommandArgs),
     /// The main job: polycube, hex mesh, spline, exports and report.html.
     Run(run::RunArgs),
     /// The main job on every mesh of a folder, files in parallel, with a summary table.

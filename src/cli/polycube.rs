@@ -16,7 +16,7 @@ use std::path::PathBuf;
 pub struct PolycubeArgs {
     /// Input surface (.obj, .stl, .off).
     pub mesh: PathBuf,
-    /// Output folder.
+    /// Output folder: absent or empty (a used one is refused unless --force).
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Weld tolerance relative to the bounding-box diagonal (negative: no welding;
@@ -82,6 +82,18 @@ pub struct PolycubeArgs {
     /// No progress on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `sddpm polycube`'s arguments: the polycube options and `--force`.
+#[derive(clap::Args, Debug)]
+pub struct PolycubeCommandArgs {
+    #[command(flatten)]
+    pub polycube: PolycubeArgs,
+    /// Write an output folder that is not empty: first remove the files sddpm writes
+    /// (report.json, polycube.obj, candidates.json, ...; other files are kept).
+    /// Without it a non-empty folder is refused.
+    #[arg(long)]
+    pub force: bool,
 }
 
 pub fn request_of(a: &PolycubeArgs) -> Result<ContextRequest> {
@@ -159,27 +171,38 @@ pub fn load_generator(a: &PolycubeArgs) -> Result<Model> {
     }
 }
 
-pub fn run(a: &PolycubeArgs) -> Result<i32> {
+pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
+    let a = &c.polycube;
     let t0 = std::time::Instant::now();
     let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh, a.weld_tolerance)?;
     let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(a)?;
     let model = load_generator(a)?;
     let opts = options_of(a)?;
-    std::fs::create_dir_all(&a.output).map_err(|e| Error::io(a.output.display(), e))?;
+    // every option is checked before the folder is touched
+    sddpm::pipeline::RunOptions { polycube: opts.clone(), ..Default::default() }.validate()?;
+    super::common::prepare_output(&a.output, c.force)?;
     let quiet = a.quiet;
     let mut progress = super::common::progress_bar(quiet);
     let (result, auto, err) = generate_polycube(&model, &mesh, genus, &request, &opts, &AutoOptions::default(), &mut progress)?;
     let chosen = result.chosen.map(|i| &result.candidates[i]);
+    let mut written = Vec::new();
     if let Some(c) = chosen {
         let obj = to_user_polycube(&result, c);
         sddpm::export::obj::write_obj(&a.output.join("polycube.obj"), &obj, &format!("libsddpm polycube {} (user coordinates)", c.context))?;
+        written.push("polycube.obj");
     }
-    let report = json!({
+    write_json(&a.output.join("candidates.json"), &json!({ "candidates": result.candidates, "auto": auto }))?;
+    written.push("candidates.json");
+    let mut report = json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "command": super::common::command_line(),
+        "options": opts,
         "input": { "path": path, "vertices": mrep.vertices, "triangles": mrep.triangles, "genus": genus, "volume": mrep.volume },
         "polycube": {
             "labels": chosen.map(|c| c.labels.to_vec()),
             "names": chosen.map(|c| c.context.names()),
+            "description": chosen.map(|c| c.context.describe()),
             "source": result.source,
             "generator": result.generator,
             "candidates": result.candidates.len(),
@@ -191,8 +214,8 @@ pub fn run(a: &PolycubeArgs) -> Result<i32> {
         },
         "seconds": { "total": t0.elapsed().as_secs_f64(), "polycube": result.timings },
     });
-    write_json(&a.output.join("report.json"), &report)?;
-    write_json(&a.output.join("candidates.json"), &json!({ "candidates": result.candidates, "auto": auto }))?;
+    let text = sddpm::pipeline::report::json_with_manifest(&a.output, &written, &mut report)?;
+    std::fs::write(a.output.join("report.json"), text).map_err(|e| Error::io(a.output.join("report.json").display(), e))?;
     if a.json {
         println!("{report}");
     } else if !quiet {

@@ -15,6 +15,13 @@ pub struct RunArgs {
     /// Stop after the hex mesh (no spline.bext / model.k).
     #[arg(long)]
     pub no_spline: bool,
+    /// Write an output folder that is not empty: first remove the files sddpm writes
+    /// (report.json, hex.*, spline.*, ...; other files are kept). Without it a
+    /// non-empty folder is refused.
+    #[arg(long)]
+    pub force: bool,
+    #[command(flatten)]
+    pub spline_files: SplineFileArgs,
     /// Refuse (exit 2) when no candidate passes verification instead of meshing the
     /// best-fitting unverified one, and when the hex mesh keeps inverted elements.
     #[arg(long)]
@@ -24,6 +31,35 @@ pub struct RunArgs {
     pub hex_candidates: Option<usize>,
     #[command(flatten)]
     pub hex: HexArgs,
+}
+
+/// How spline.bext is written, shared by `sddpm run` and `sddpm batch`.
+#[derive(clap::Args, Debug)]
+pub struct SplineFileArgs {
+    /// Dense BEXT operator rows (64 entries each, as Hex2Spline writes them) instead of the default sparse rows.
+    #[arg(long)]
+    pub dense_bext: bool,
+    /// Absolute tolerance of the BEXT operator entries: each is written with the fewest decimals that read back within it (default 1e-8; 0: exact).
+    #[arg(long, value_name = "T")]
+    pub bext_tolerance: Option<f64>,
+}
+
+/// Apply the spline-file arguments to the run's spline options (none without a spline).
+pub fn spline_file_options(a: &SplineFileArgs, opts: &mut RunOptions) -> Result<()> {
+    if let Some(t) = a.bext_tolerance {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(Error::InvalidArgument(format!("--bext-tolerance must be a finite number >= 0, got {t}")));
+        }
+    }
+    if let Some(so) = opts.spline.as_mut() {
+        if a.dense_bext {
+            so.sparse_bext = false;
+        }
+        if let Some(t) = a.bext_tolerance {
+            so.bext_tolerance = t;
+        }
+    }
+    Ok(())
 }
 
 /// The hex stage's options, shared by `sddpm run` and `sddpm batch`.
@@ -135,11 +171,13 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
     let model = load_generator(p)?;
-    std::fs::create_dir_all(&p.output).map_err(|e| Error::io(p.output.display(), e))?;
     opts.polycube = options_of(p)?;
     if a.no_spline {
         opts.spline = None;
     }
+    spline_file_options(&a.spline_files, &mut opts)?;
+    opts.validate()?;
+    super::common::prepare_output(&p.output, a.force)?;
     opts.accept_unverified = !a.strict;
     opts.require_valid_hex = a.strict;
     if let Some(n) = a.hex_candidates {
@@ -147,7 +185,8 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     }
     let mut progress = super::common::progress_bar(p.quiet);
     let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
-    let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report }, &r, t0.elapsed().as_secs_f64())?;
+    let command = super::common::command_line();
+    let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(&command) }, &r, t0.elapsed().as_secs_f64())?;
     if let Some(e) = &r.verification_error {
         if !p.quiet || p.json {
             eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
@@ -164,7 +203,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
         let h = &j["hex"];
         eprintln!(
             "polycube {} ({} of {} candidates verified); hex ({}): {} elements, min scaled Jacobian {:.3}, mean {:.3}, {} inverted, Hausdorff {:.2} % of the diagonal; {}wrote {} in {:.1} s",
-            j["polycube"]["names"].as_str().unwrap_or("?"),
+            j["polycube"]["description"].as_str().unwrap_or("?"),
             j["polycube"]["verified"],
             j["polycube"]["candidates"],
             r.hex.domain,

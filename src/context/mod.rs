@@ -151,6 +151,24 @@ impl Context {
         self.labels.iter().map(|p| p.name()).collect::<Vec<_>>().join(",")
     }
 
+    /// The occupied cells for a reader: each label with its cell's grid position
+    /// (x, y, z), e.g. "THC+Z at (0,0,0)" or "cube at (0,0,0), BHC+Z at (1,0,0)";
+    /// "empty" for no occupied cell.
+    pub fn describe(&self) -> String {
+        let v: Vec<String> = self
+            .occupied()
+            .map(|n| {
+                let c = cell_coords(n);
+                format!("{} at ({},{},{})", self.labels[n].name(), c[0], c[1], c[2])
+            })
+            .collect();
+        if v.is_empty() {
+            "empty".into()
+        } else {
+            v.join(", ")
+        }
+    }
+
     pub fn occupied(&self) -> impl Iterator<Item = usize> + '_ {
         (0..NUM_CELLS).filter(move |&n| self.labels[n] != Primitive::Null)
     }
@@ -479,6 +497,14 @@ pub fn context_frame(ctx: &Context) -> Option<BoxFrame> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The readable form names each occupied cell's label and grid position.
+    #[test]
+    fn describe_names_labels_and_positions() {
+        assert_eq!(Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap().describe(), "THC+Z at (0,0,0)");
+        assert_eq!(Context::parse("cube,BHC+Z,0,0,0,0,0,0,0,0,0,cube").unwrap().describe(), "cube at (0,0,0), BHC+Z at (1,0,0), cube at (2,1,1)");
+        assert_eq!(Context::default().describe(), "empty");
+    }
 
     #[test]
     fn congruence_up_to_rotation_and_translation() {

@@ -12,8 +12,12 @@
 //! s nnz k0 v0 k1 v1 ...   (n sparse rows: Bernstein index, value)
 //! ```
 //! Bernstein index i + 4j + 16k (u fastest). The element's Bézier points are
-//! Pb[k] = sum_r C[r][k] P[ids[r]]. Numbers are written in the shortest form
-//! that reads back to the same f64.
+//! Pb[k] = sum_r C[r][k] P[ids[r]]. Control points are written in the shortest
+//! form that reads back to the same f64. Operator entries too by default
+//! ([`bext_text`]); [`bext_text_within`] writes each with the fewest decimals that
+//! read back within an absolute tolerance (the run folder's spline.bext: within
+//! [`RUN_FOLDER_TOLERANCE`] by default), and a sparse row then leaves out the
+//! entries that round to zero.
 
 use crate::error::{Error, Result};
 use crate::spline::Spline;
@@ -86,13 +90,59 @@ pub fn fmt_f64(v: f64) -> String {
     }
 }
 
-/// BEXT text of a spline (dense or sparse operator rows).
+/// The default absolute tolerance of the operator entries in the run folder's
+/// spline.bext ([`crate::spline::DEFAULT_BEXT_TOLERANCE`], 1e-8; why that value:
+/// there).
+pub const RUN_FOLDER_TOLERANCE: f64 = crate::spline::DEFAULT_BEXT_TOLERANCE;
+
+/// Decimals that round any value to within `tol` (half a unit in the last place).
+fn decimals_for(tol: f64) -> usize {
+    // 10^-d / 2 <= tol, with a margin of a few ulps for the decimal-to-binary read
+    ((0.5 / tol).log10() * (1.0 + 1e-12)).ceil().clamp(0.0, 17.0) as usize
+}
+
+/// `v` with the fewest decimals (at most `d`) that reads back within half a unit
+/// of the d-th decimal: rounded to d decimals, trailing zeros dropped ("0.5",
+/// "0.166666666667", "1"); "0" for a value that rounds to zero. Values of 1e6 or
+/// more are written exactly ([`fmt_f64`]).
+fn fmt_decimals(v: f64, d: usize) -> String {
+    if !v.is_finite() || v.abs() >= 1e6 {
+        return fmt_f64(v);
+    }
+    let mut s = format!("{v:.d$}");
+    if s.contains('.') {
+        while s.ends_with('0') {
+            s.pop();
+        }
+        if s.ends_with('.') {
+            s.pop();
+        }
+    }
+    if s == "-0" {
+        s = "0".into();
+    }
+    s
+}
+
+/// BEXT text of a spline (dense or sparse operator rows), every number exact.
 pub fn to_bext_string(sp: &Spline, sparse: bool) -> String {
     bext_text(&Bext::from_spline(sp), sparse)
 }
 
-/// BEXT text of parsed / assembled content.
+/// BEXT text of parsed / assembled content, every number exact.
 pub fn bext_text(b: &Bext, sparse: bool) -> String {
+    bext_text_within(b, sparse, 0.0)
+}
+
+/// BEXT text whose operator entries read back within `tolerance` (absolute; 0 or
+/// less: exact) with the fewest decimals that guarantee it; control points exact.
+/// A sparse row lists only the entries whose written value is not zero.
+pub fn bext_text_within(b: &Bext, sparse: bool, tolerance: f64) -> String {
+    let d = (tolerance > 0.0).then(|| decimals_for(tolerance));
+    let entry = |v: f64| match d {
+        Some(d) => fmt_decimals(v, d),
+        None => fmt_f64(v),
+    };
     let mut s = String::with_capacity(64 * b.nodes.len() + 2048 * b.elements.len());
     s.push_str("B E X T\ntype hex\n");
     let _ = writeln!(s, "nodeN {}", b.nodes.len());
@@ -109,16 +159,16 @@ pub fn bext_text(b: &Bext, sparse: bool) -> String {
         for r in 0..n {
             let row = &el.operator[r * 64..(r + 1) * 64];
             if sparse {
-                let nz: Vec<(usize, f64)> = row.iter().enumerate().filter(|(_, &v)| v != 0.0).map(|(k, &v)| (k, v)).collect();
+                let nz: Vec<(usize, String)> = row.iter().enumerate().filter(|(_, &v)| v != 0.0).map(|(k, &v)| (k, entry(v))).filter(|(_, t)| t != "0").collect();
                 let _ = write!(s, "s {}", nz.len());
-                for (k, v) in nz {
-                    let _ = write!(s, " {} {}", k, fmt_f64(v));
+                for (k, t) in nz {
+                    let _ = write!(s, " {k} {t}");
                 }
             } else {
                 s.push('d');
                 for &v in row {
                     s.push(' ');
-                    s.push_str(&fmt_f64(v));
+                    s.push_str(&entry(v));
                 }
             }
             s.push('\n');
@@ -127,9 +177,43 @@ pub fn bext_text(b: &Bext, sparse: bool) -> String {
     s
 }
 
-/// Write the spline's Bézier extraction as BEXT v1.
+/// Write the spline's Bézier extraction as BEXT v1, every number exact.
 pub fn write_bext(path: &Path, sp: &Spline, sparse: bool) -> Result<()> {
-    std::fs::write(path, to_bext_string(sp, sparse)).map_err(|e| Error::io(path.display(), e))
+    write_bext_within(path, sp, sparse, 0.0)
+}
+
+/// Write the spline's Bézier extraction as BEXT v1 with operator entries within
+/// `tolerance` ([`bext_text_within`]).
+pub fn write_bext_within(path: &Path, sp: &Spline, sparse: bool, tolerance: f64) -> Result<()> {
+    std::fs::write(path, bext_text_within(&Bext::from_spline(sp), sparse, tolerance)).map_err(|e| Error::io(path.display(), e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each entry reads back within the tolerance, with no more decimals than
+    /// needed; zero stays "0".
+    #[test]
+    fn entries_within_a_tolerance() {
+        assert_eq!(decimals_for(1e-12), 12);
+        assert_eq!(decimals_for(5e-13), 13);
+        assert_eq!(decimals_for(1e-3), 3);
+        let d = decimals_for(1e-12);
+        assert_eq!(fmt_decimals(0.5, d), "0.5");
+        assert_eq!(fmt_decimals(1.0, d), "1");
+        assert_eq!(fmt_decimals(1.0 / 6.0, d), "0.166666666667");
+        assert_eq!(fmt_decimals(0.19999999999999998, d), "0.2");
+        assert_eq!(fmt_decimals(-1e-14, d), "0");
+        assert_eq!(fmt_decimals(3e-13, d), "0");
+        let mut x = 0.123456789;
+        for _ in 0..10_000 {
+            x = (x * 9301.0 + 0.49297) % 1.0;
+            let v = x * x * x;
+            let back: f64 = fmt_decimals(v, d).parse().unwrap();
+            assert!((back - v).abs() <= 1e-12, "{v}: {back}");
+        }
+    }
 }
 
 /// Read a BEXT v1 file (hexahedral elements, dense or sparse rows).

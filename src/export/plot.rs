@@ -28,39 +28,50 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
 pub const WIDTH: u32 = 900;
 pub const HEIGHT: u32 = 520;
 
-/// A histogram of `counts` over equal bins of [lo, hi] as a PNG.
-pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &str, xlabel: &str) -> Result<()> {
+/// A histogram of `counts` over equal bins of [lo, hi] as a PNG, counts on a
+/// logarithmic axis (a few bad elements among thousands stay visible; an empty bin
+/// draws nothing), with an optional vertical line at a goal `(x, label)`.
+pub fn histogram_png(path: &Path, counts: &[usize], lo: f64, hi: f64, title: &str, xlabel: &str, goal: Option<(f64, &str)>) -> Result<()> {
     ensure_font();
     if counts.is_empty() || !(hi > lo) {
         return Err(Error::InvalidArgument(format!("histogram needs bins and lo < hi (got {} bins, [{lo}, {hi}])", counts.len())));
     }
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-    let ymax = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.08;
+    // bars start below 1 so that a bin with one element shows
+    const BASE: f64 = 0.5;
+    let ymax = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 2.0;
     let w = (hi - lo) / counts.len() as f64;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 24))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d(lo..hi, 0.0..ymax)
+        .build_cartesian_2d(lo..hi, (BASE..ymax).log_scale())
         .map_err(|e| plot_err(path, e))?;
     chart
         .configure_mesh()
         .x_desc(xlabel)
-        .y_desc("count")
-        .y_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("count (log scale)")
+        .y_label_formatter(&|v| if *v < 1.0 { String::new() } else { format!("{v:.0}") })
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
         .draw()
         .map_err(|e| plot_err(path, e))?;
     chart
-        .draw_series(counts.iter().enumerate().map(|(i, &c)| {
+        .draw_series(counts.iter().enumerate().filter(|(_, &c)| c > 0).map(|(i, &c)| {
             let x0 = lo + i as f64 * w;
             let colour = if x0 + w <= 0.0 { RGBColor(200, 60, 50) } else { RGBColor(60, 110, 180) };
-            Rectangle::new([(x0 + 0.05 * w, 0.0), (x0 + 0.95 * w, c as f64)], colour.filled())
+            Rectangle::new([(x0 + 0.05 * w, BASE), (x0 + 0.95 * w, c as f64)], colour.filled())
         }))
         .map_err(|e| plot_err(path, e))?;
+    if let Some((x, label)) = goal.filter(|(x, _)| x.is_finite() && (lo..=hi).contains(x)) {
+        let red = RGBColor(200, 40, 40);
+        chart.draw_series(LineSeries::new([(x, BASE), (x, ymax)], red.stroke_width(2))).map_err(|e| plot_err(path, e))?;
+        chart
+            .draw_series(std::iter::once(Text::new(label.to_string(), (x + 0.012 * (hi - lo), ymax / 1.6), ("sans-serif", 15).into_font().color(&red))))
+            .map_err(|e| plot_err(path, e))?;
+    }
     root.present().map_err(|e| plot_err(path, e))?;
     Ok(())
 }
@@ -212,20 +223,26 @@ pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) 
     let n = bars.len();
     let root = BitMapBackend::new(path, (WIDTH, (120 + 34 * n as u32).max(220))).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    // one bar per stage centred on its row (row n - 1 - i for bar i: the first on
+    // top), with a gap between bars; the label is the tick at the row's centre
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 24))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(150)
-        .build_cartesian_2d(0.0..xmax, (0..n).into_segmented())
+        .build_cartesian_2d(0.0..xmax, -0.5..n as f64 - 0.5)
         .map_err(|e| plot_err(path, e))?;
     chart
         .configure_mesh()
         .x_desc(xlabel)
         .y_labels(n)
-        .y_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) if *i < n => bars[n - 1 - *i].0.clone(),
-            _ => String::new(),
+        .y_label_formatter(&|v| {
+            let r = v.round();
+            if (v - r).abs() < 1e-6 && r >= 0.0 && (r as usize) < n {
+                bars[n - 1 - r as usize].0.clone()
+            } else {
+                String::new()
+            }
         })
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
@@ -234,8 +251,8 @@ pub fn bars_png(path: &Path, bars: &[(String, f64)], title: &str, xlabel: &str) 
         .map_err(|e| plot_err(path, e))?;
     chart
         .draw_series(bars.iter().enumerate().map(|(i, (_, v))| {
-            let r = n - 1 - i;
-            Rectangle::new([(0.0, SegmentValue::Exact(r)), (*v, SegmentValue::Exact(r + 1))], RGBColor(60, 110, 180).filled())
+            let r = (n - 1 - i) as f64;
+            Rectangle::new([(0.0, r - 0.35), (*v, r + 0.35)], RGBColor(60, 110, 180).filled())
         }))
         .map_err(|e| plot_err(path, e))?;
     root.present().map_err(|e| plot_err(path, e))?;

@@ -19,14 +19,23 @@ pub struct OutputOptions {
     pub vtk: Option<String>,
     /// Control mesh (default Some("spline_control.vtk")).
     pub control_vtk: Option<String>,
-    /// Sub-cells per direction and element in the sampled VTK (default 4), lowered
-    /// (to 1 at least) so that the file has at most `vtk_max_cells` cells.
+    /// Sub-cells per direction and element in the sampled VTK (default 2: 27
+    /// points per element, enough to show each element's curvature; 4 wrote 42 MB
+    /// of ASCII for the 2,560 elements of the torus), lowered (to 1 at least) so
+    /// that the file has at most `vtk_max_cells` cells.
     pub vtk_samples: usize,
+    /// Binary legacy VTK for the sampled spline (default true: 32-bit values,
+    /// about a fifth of the ASCII size; false: ASCII with full precision).
+    pub vtk_binary: bool,
     /// Cap on the sampled VTK's cells (default 500,000, about 140 MB: 4 samples on
     /// the 144,000 elements of a voxel-68 cgal_joint wrote 9.2 M cells, 2.5 GB).
     pub vtk_max_cells: usize,
     /// Sparse BEXT rows (default: `SplineOptions::sparse_bext` of the spline).
     pub sparse_bext: Option<bool>,
+    /// Absolute tolerance of the BEXT operator entries: each is written with the
+    /// fewest decimals that read back within it (default:
+    /// `SplineOptions::bext_tolerance` of the spline; 0: every entry exact).
+    pub bext_tolerance: Option<f64>,
     pub deck: DeckOptions,
 }
 
@@ -37,9 +46,11 @@ impl Default for OutputOptions {
             lsdyna: "model.k".into(),
             vtk: Some("spline.vtk".into()),
             control_vtk: Some("spline_control.vtk".into()),
-            vtk_samples: 4,
+            vtk_samples: 2,
+            vtk_binary: true,
             vtk_max_cells: 500_000,
             sparse_bext: None,
+            bext_tolerance: None,
             deck: Default::default(),
         }
     }
@@ -62,10 +73,16 @@ fn vtk_samples(o: &OutputOptions, elements: usize) -> usize {
 pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> Result<serde_json::Value> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
     let sparse = o.sparse_bext.unwrap_or(sp.options().sparse_bext);
-    bext::write_bext(&dir.join(&o.bext), sp, sparse)?;
+    let tolerance = o.bext_tolerance.unwrap_or(sp.options().bext_tolerance);
+    bext::write_bext_within(&dir.join(&o.bext), sp, sparse, tolerance)?;
     lsdyna::write_iga_deck(&dir.join(&o.lsdyna), &o.bext, &o.deck)?;
     if let Some(v) = &o.vtk {
-        spline_vtk::write_spline_vtk(&dir.join(v), sp, vtk_samples(o, sp.num_elements()))?;
+        let n = vtk_samples(o, sp.num_elements());
+        if o.vtk_binary {
+            spline_vtk::write_spline_vtk_binary(&dir.join(v), sp, n)?;
+        } else {
+            spline_vtk::write_spline_vtk(&dir.join(v), sp, n)?;
+        }
     }
     if let Some(v) = &o.control_vtk {
         spline_vtk::write_control_mesh_vtk(&dir.join(v), sp)?;
@@ -77,6 +94,7 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
         m.insert("vtk".into(), o.vtk.clone().into());
         m.insert("control_vtk".into(), o.control_vtk.clone().into());
         m.insert("bext_sparse".into(), sparse.into());
+        m.insert("bext_tolerance".into(), tolerance.into());
     }
     Ok(j)
 }
@@ -85,11 +103,12 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
 mod tests {
     use super::*;
 
-    /// The sampled VTK keeps 4 samples on the main job's level-2 meshes (2,592
+    /// With 4 samples the VTK keeps them on the main job's level-2 meshes (2,592
     /// elements: 165,888 cells) and drops to 1 on a 144,000-element one.
     #[test]
     fn sampled_vtk_stays_under_its_cell_cap() {
-        let o = OutputOptions::default();
+        assert_eq!(vtk_samples(&OutputOptions::default(), 2_592), 2);
+        let o = OutputOptions { vtk_samples: 4, ..OutputOptions::default() };
         assert_eq!(vtk_samples(&o, 2_592), 4);
         assert_eq!(vtk_samples(&o, 25_469), 2);
         assert_eq!(vtk_samples(&o, 143_996), 1);

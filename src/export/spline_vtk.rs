@@ -89,10 +89,100 @@ pub fn spline_vtk_string(sp: &Spline, s: usize) -> Result<String> {
     Ok(out)
 }
 
-/// Write the sampled spline.
+/// Write the sampled spline (ASCII, [`spline_vtk_string`]).
 pub fn write_spline_vtk(path: &Path, sp: &Spline, samples: usize) -> Result<()> {
     let s = spline_vtk_string(sp, samples)?;
     std::fs::write(path, s).map_err(|e| Error::io(path.display(), e))
+}
+
+/// The sampled spline as binary legacy VTK (the same grid, cells and data as
+/// [`spline_vtk_string`]; big-endian 32-bit floats and integers, as the legacy
+/// format prescribes): about a fifth of the ASCII size, read by ParaView and VTK.
+pub fn spline_vtk_binary(sp: &Spline, s: usize) -> Result<Vec<u8>> {
+    if s == 0 || s > 32 {
+        return Err(Error::InvalidArgument(format!("samples per direction must be 1..=32, got {s}")));
+    }
+    let m = s + 1;
+    let ne = sp.num_elements();
+    let npts = ne * m * m * m;
+    let ncell = ne * s * s * s;
+    let mut out: Vec<u8> = Vec::with_capacity(20 * npts + 40 * ncell + 512);
+    let f32s = |out: &mut Vec<u8>, v: f64| out.extend_from_slice(&(v as f32).to_be_bytes());
+    let i32s = |out: &mut Vec<u8>, v: usize| out.extend_from_slice(&(v as i32).to_be_bytes());
+    let mut det = Vec::with_capacity(npts);
+    let mut sj = Vec::with_capacity(npts);
+    out.extend_from_slice(format!("# vtk DataFile Version 3.0\nsddpm TH-spline3D sampled per element\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS {npts} float\n").as_bytes());
+    for e in 0..ne {
+        let pb = sp.bezier_points(e)?;
+        for k in 0..m {
+            for j in 0..m {
+                for i in 0..m {
+                    let p = [i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64];
+                    let (x, jac) = map_from_bezier(&pb, p);
+                    for c in x {
+                        f32s(&mut out, c);
+                    }
+                    det.push(det3(&jac));
+                    sj.push(scaled_det(&jac));
+                }
+            }
+        }
+    }
+    out.extend_from_slice(format!("\nCELLS {} {}\n", ncell, 9 * ncell).as_bytes());
+    let id = |e: usize, i: usize, j: usize, k: usize| e * m * m * m + i + m * (j + m * k);
+    for e in 0..ne {
+        for k in 0..s {
+            for j in 0..s {
+                for i in 0..s {
+                    i32s(&mut out, 8);
+                    for v in [
+                        id(e, i, j, k),
+                        id(e, i + 1, j, k),
+                        id(e, i + 1, j + 1, k),
+                        id(e, i, j + 1, k),
+                        id(e, i, j, k + 1),
+                        id(e, i + 1, j, k + 1),
+                        id(e, i + 1, j + 1, k + 1),
+                        id(e, i, j + 1, k + 1),
+                    ] {
+                        i32s(&mut out, v);
+                    }
+                }
+            }
+        }
+    }
+    out.extend_from_slice(format!("\nCELL_TYPES {ncell}\n").as_bytes());
+    for _ in 0..ncell {
+        i32s(&mut out, VTK_HEXAHEDRON as usize);
+    }
+    out.extend_from_slice(format!("\nCELL_DATA {ncell}\nSCALARS element int 1\nLOOKUP_TABLE default\n").as_bytes());
+    for e in 0..ne {
+        for _ in 0..s * s * s {
+            i32s(&mut out, e);
+        }
+    }
+    out.extend_from_slice(b"\nSCALARS level int 1\nLOOKUP_TABLE default\n");
+    for el in sp.elements() {
+        for _ in 0..s * s * s {
+            i32s(&mut out, el.level as usize);
+        }
+    }
+    out.extend_from_slice(format!("\nPOINT_DATA {npts}\nSCALARS jacobian float 1\nLOOKUP_TABLE default\n").as_bytes());
+    for &v in &det {
+        f32s(&mut out, v);
+    }
+    out.extend_from_slice(b"\nSCALARS scaled_jacobian float 1\nLOOKUP_TABLE default\n");
+    for &v in &sj {
+        f32s(&mut out, v);
+    }
+    out.push(b'\n');
+    Ok(out)
+}
+
+/// Write the sampled spline as binary legacy VTK ([`spline_vtk_binary`]).
+pub fn write_spline_vtk_binary(path: &Path, sp: &Spline, samples: usize) -> Result<()> {
+    let b = spline_vtk_binary(sp, samples)?;
+    std::fs::write(path, b).map_err(|e| Error::io(path.display(), e))
 }
 
 /// Write the control mesh (hex topology, fitted control points of the vertex functions).

@@ -289,8 +289,11 @@ pub unsafe extern "C" fn sddpm_hex_mesh_report_json(h: *const SddpmHexMesh, buf:
             Some(r) => crate::hex::report_json(r),
             None => {
                 let q = summarize(&h.scaled_jacobian);
+                let irregular = crate::hex::topology::irregular_edges(&h.mesh);
                 serde_json::json!({ "vertices": h.mesh.nodes.len(), "elements": h.mesh.elements.len(),
-                    "min_scaled_jacobian": q.min, "mean_scaled_jacobian": q.mean, "inverted": q.inverted })
+                    "min_scaled_jacobian": q.min, "mean_scaled_jacobian": q.mean, "inverted": q.inverted,
+                    "irregular_edges": irregular.total(), "irregular_edges_interior": irregular.interior,
+                    "irregular_edges_boundary": irregular.boundary })
             }
         };
         copy_string(&v.to_string(), buf, len, needed, "the report")

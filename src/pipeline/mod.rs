@@ -44,6 +44,8 @@ pub fn generate_polycube(
     aopts: &AutoOptions,
     progress: &mut dyn Progress,
 ) -> Result<(PolycubeResult, Option<AutoReport>, Option<Error>)> {
+    let mut progress = crate::error::MonotoneProgress::new(progress);
+    let progress: &mut dyn Progress = &mut progress;
     match request {
         ContextRequest::Contexts(cs) => {
             let r = generate_from_contexts(model, mesh, genus, cs, opts, progress)?;
@@ -184,6 +186,9 @@ pub struct RunResult {
     pub spline: Option<Spline>,
     /// Wall-clock seconds per stage ("polycube", "hex", "spline").
     pub seconds: Vec<(String, f64)>,
+    /// The options of the run (report.json "options"; the quality goals of
+    /// report.html's marks).
+    pub options: RunOptions,
 }
 
 /// The affine map equal to `f` (which must be affine), read off at four points.
@@ -228,6 +233,8 @@ pub fn run(
 ) -> Result<RunResult> {
     // every option is checked before any work
     opts.validate()?;
+    let mut progress = crate::error::MonotoneProgress::new(progress);
+    let progress: &mut dyn Progress = &mut progress;
     let mut seconds = Vec::new();
     let t0 = Instant::now();
     let (mut pr, auto, err) = {
@@ -252,7 +259,7 @@ pub fn run(
         None => None,
     };
     check_progress(progress, 1.0, "done")?;
-    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, verified, verification_error, hex, spline, seconds })
+    Ok(RunResult { polycube: pr, auto, candidate, hex_attempts: attempts, verified, verification_error, hex, spline, seconds, options: opts.clone() })
 }
 
 /// What the hex stage of the main job made of a polycube result ([`mesh_polycube`]).
@@ -277,6 +284,8 @@ pub struct HexStage {
 /// the order lays out without diffusion are added to `pr`. Progress over 0-1.
 pub fn mesh_polycube(pr: &mut PolycubeResult, err: Option<Error>, mesh: &TriMesh, opts: &RunOptions, progress: &mut dyn Progress) -> Result<HexStage> {
     opts.validate()?;
+    let mut progress = crate::error::MonotoneProgress::new(progress);
+    let progress: &mut dyn Progress = &mut progress;
     let verification_error = err.as_ref().map(|e| e.to_string());
     let mut hex_opts = opts.hex.clone();
     if err.is_some() {
@@ -564,10 +573,11 @@ impl HexAttempt {
         (self.inverted, self.goals_missed, self.goal_shortfall, -self.min_scaled_jacobian)
     }
 
+    /// The attempt's figures in words, its context readable ("THC+Z at (0,0,0)").
     fn describe(&self) -> String {
         format!(
             "{}: {} inverted, min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %",
-            self.context,
+            Context::parse(&self.context).map(|c| c.describe()).unwrap_or_else(|_| self.context.clone()),
             self.inverted,
             self.min_scaled_jacobian,
             self.mean_scaled_jacobian,

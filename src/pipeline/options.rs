@@ -167,7 +167,8 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("spline.fit.max_backtracks", Integer, false, "Fit: halvings of a step that would create a non-positive Jacobian"),
     opt("spline.fit.two_sided", Bool, false, "Fit: also pull the boundary towards every surface vertex"),
     opt("spline.fit.max_reverse_points", Integer, false, "Fit: most surface vertices the two-sided term uses"),
-    opt("spline.sparse_bext", Bool, false, "Write sparse BEXT operator rows (default: dense, as Hex2Spline)"),
+    opt("spline.sparse_bext", Bool, false, "Write sparse BEXT operator rows (default; false: dense rows of 64 entries, as Hex2Spline)"),
+    opt("spline.bext_tolerance", Number, false, "Absolute tolerance of the BEXT operator entries: the fewest decimals that read back within it (0: exact)"),
     // the main job
     opt("accept_unverified", Bool, false, "When no candidate passes verification, mesh unverified candidates (by fit) instead of failing with VERIFICATION_FAILED"),
     opt("require_valid_hex", Bool, false, "Refuse (MESHING_FAILED) a hex mesh that keeps inverted elements"),
@@ -300,7 +301,7 @@ impl RunOptions {
         let positive = "a finite number > 0";
         let non_negative = "a finite number >= 0";
         let finite = "a finite number";
-        let checks: [(&str, f64, bool, &str); 26] = [
+        let checks: [(&str, f64, bool, &str); 27] = [
             ("polycube.sampler.start_noise", s.start_noise.unwrap_or(1.0), s.start_noise.is_none_or(|x| x.is_finite() && x > 0.0), positive),
             ("polycube.sampler.clip_margin", s.clip_margin, s.clip_margin.is_finite(), finite),
             ("polycube.sampler.eps_scale", s.eps_scale, s.eps_scale.is_finite() && s.eps_scale > 0.0, positive),
@@ -327,6 +328,7 @@ impl RunOptions {
             ("spline.sharp_angle_deg", self.spline_sharp_angle(), (0.0..=180.0).contains(&self.spline_sharp_angle()), "an angle in degrees in [0, 180] (or none)"),
             ("spline.fit.regularization", self.spline.as_ref().map_or(0.0, |s| s.fit.regularization), self.spline.as_ref().is_none_or(|s| s.fit.regularization.is_finite() && s.fit.regularization >= 0.0), non_negative),
             ("spline.fit.samples", self.spline.as_ref().map_or(1.0, |s| s.fit.samples as f64), self.spline.as_ref().is_none_or(|s| s.fit.samples > 0), "at least 1"),
+            ("spline.bext_tolerance", self.spline.as_ref().map_or(0.0, |s| s.bext_tolerance), self.spline.as_ref().is_none_or(|s| s.bext_tolerance.is_finite() && s.bext_tolerance >= 0.0), non_negative),
         ];
         if let Some((name, value, _, expected)) = checks.iter().find(|c| !c.2) {
             return Err(Error::InvalidArgument(format!("option {name} must be {expected}, got {value}")));
