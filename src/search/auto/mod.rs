@@ -243,6 +243,8 @@ fn stopped(c: &Candidate) -> String {
         Stage::Pending => "not diffused".into(),
         Stage::Occupancy => match &c.refusal {
             Some(r) => format!("refused by the pre-check: {r}"),
+            // nothing in empty cells and no starved cell: the occupancy passed
+            None if c.occupancy.in_empty_cells == 0.0 && c.occupancy.starved_cells.is_empty() => "refused before diffusion by the fit limit".into(),
             None => format!(
                 "refused before diffusion by the occupancy pre-check or the fit limit ({:.1} % of the surface in empty cells, {} starved cell(s))",
                 100.0 * c.occupancy.in_empty_cells,

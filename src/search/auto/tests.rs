@@ -226,6 +226,9 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
     assert_eq!(near.len(), 3, "{near:?}");
     assert!(near[0].starts_with("THC+Z,cube,null") && near[0].contains("fit 0.0400, mean 0.0300") && near[0].contains("failed TCV"), "{near:?}");
     assert!(near[1].starts_with("cube,BHC+X") && near[2].starts_with("BHC+Z,cube"), "{near:?}");
+    // the one refused before diffusion with a clean occupancy: the fit limit
+    let all = nearest_candidates(&r, 4);
+    assert!(all[3].starts_with("cube,cube") && all[3].ends_with("refused before diffusion by the fit limit)"), "{all:?}");
     let local = |cell: usize, verified: &[&str]| LocalResult {
         subregion: subregion(cell, 0.9, if cell == 0 { 1 } else { 0 }),
         fits: vec![("THC+Z".into(), 0.01)],
