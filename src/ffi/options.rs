@@ -240,6 +240,9 @@ mod tests {
             assert_eq!(sddpm_options_set_number(o, null(), 1.0), Status::InvalidArgument);
             assert_eq!(sddpm_options_set_number(null_mut(), c("hex.map.level").as_ptr(), 1.0), Status::InvalidArgument);
             assert_eq!(sddpm_options_describe_json(null(), null_mut(), 0, &mut need), Status::BufferTooSmall);
+            // the handle's own description is longer than the defaults' ("false" for
+            // "true", "Identity" for "All"): its size is asked of the handle
+            assert_eq!(sddpm_options_describe_json(o, null_mut(), 0, &mut need), Status::BufferTooSmall);
             let mut buf = vec![0 as c_char; need];
             assert_eq!(sddpm_options_describe_json(o, buf.as_mut_ptr(), need, null_mut()), Status::Ok);
             let j: serde_json::Value = serde_json::from_str(CStr::from_ptr(buf.as_ptr()).to_str().unwrap()).unwrap();
