@@ -30,7 +30,7 @@ mod local;
 pub mod rank;
 pub mod volume;
 
-use super::generate::{finish, prepare_input, OrientationSearch, PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, FIT_SAMPLES};
+use super::generate::{finish, prepare_input, Candidate, OrientationSearch, PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES};
 use crate::diffusion::Model;
 use crate::error::{check_progress, Error, Progress, Result};
 use crate::geometry::SurfaceSample;
@@ -227,8 +227,67 @@ impl AutoReport {
     }
 }
 
+/// Candidates a refusal names ([`nearest_candidates`]).
+pub const NEAREST_NAMED: usize = 3;
+
+/// What a caller can give instead when the automated mode verifies nothing.
+pub const WHAT_TO_GIVE: &str = "give the context you expect (--labels L, e.g. one named above), constraints you know (--constraints FILE: counts of cubes, THCs and BHCs, allowed cells), or splitting ratios that put each hole in its own cell (--ratios X1,X2,X3:Y1,Y2:Z1,Z2)";
+
+/// Where a candidate stopped, in words.
+fn stopped(c: &Candidate) -> String {
+    let why = || c.report.as_ref().and_then(|r| r.reason.clone()).unwrap_or_default();
+    match c.stage {
+        Stage::Verified => "verified".into(),
+        Stage::Tcv => format!("passed GOCC, failed TCV: {}", why()),
+        Stage::Gocc => format!("failed GOCC: {}", why()),
+        Stage::Pending => "not diffused".into(),
+        Stage::Occupancy => match &c.refusal {
+            Some(r) => format!("refused by the pre-check: {r}"),
+            // nothing in empty cells and no starved cell: the occupancy passed
+            None if c.occupancy.in_empty_cells == 0.0 && c.occupancy.starved_cells.is_empty() => "refused before diffusion by the fit limit".into(),
+            None => format!(
+                "refused before diffusion by the occupancy pre-check or the fit limit ({:.1} % of the surface in empty cells, {} starved cell(s))",
+                100.0 * c.occupancy.in_empty_cells,
+                c.occupancy.starved_cells.len()
+            ),
+        },
+    }
+}
+
+/// The `n` candidates of a run nearest to verifying, furthest stage first
+/// (TCV failed, then GOCC failed, then refused before diffusion), then best mean
+/// cell fit: each named by its context, its fits (worst cell and mean, squared
+/// cell units) and where it stopped.
+pub fn nearest_candidates(result: &PolycubeResult, n: usize) -> Vec<String> {
+    let rank = |s: Stage| match s {
+        Stage::Verified => 0,
+        Stage::Tcv => 1,
+        Stage::Gocc => 2,
+        Stage::Pending => 3,
+        Stage::Occupancy => 4,
+    };
+    let mut v: Vec<&Candidate> = result.candidates.iter().collect();
+    v.sort_by(|a, b| rank(a.stage).cmp(&rank(b.stage)).then(a.fit_mean.total_cmp(&b.fit_mean)));
+    // one entry per context (a context may be tried in several placements)
+    let mut seen: Vec<[u8; crate::polycube::NUM_CELLS]> = Vec::new();
+    v.retain(|c| {
+        let new = !seen.contains(&c.labels);
+        seen.push(c.labels);
+        new
+    });
+    v.iter().take(n).map(|c| format!("{} (fit {:.4}, mean {:.4}; {})", c.context, c.fit, c.fit_mean, stopped(c))).collect()
+}
+
+/// The nearest candidates and what the caller can give, appended to a refusal.
+fn nearest_and_what_to_give(result: &PolycubeResult) -> String {
+    let near = nearest_candidates(result, NEAREST_NAMED);
+    let near = if near.is_empty() { "no candidate was formed".to_string() } else { format!("nearest candidates: {}", near.join("; ")) };
+    format!("{near}. To go on, {WHAT_TO_GIVE}")
+}
+
 /// The error of an automated run in which no global candidate passed: names the
-/// subregions whose local verification failed and suggests ratios.
+/// subregions whose local verification failed, the candidates nearest to
+/// verifying ([`nearest_candidates`]) and what the caller can give instead.
 pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Error> {
     if result.chosen.is_some() {
         return None;
@@ -241,8 +300,9 @@ pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Erro
         let mut why: Vec<String> = boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
         why.truncate(6);
         return Some(Error::VerificationFailed(format!(
-            "automated mode diffused no candidate: no occupied box has one that passes the occupancy pre-check and the fit limit ({}); the part may not be a polycube of the 3x2x2 grid, or try splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2)",
-            why.join("; ")
+            "automated mode diffused no candidate: no occupied box has one that passes the occupancy pre-check and the fit limit ({}); the part may not be a polycube of the 3x2x2 grid; {}",
+            why.join("; "),
+            nearest_and_what_to_give(result)
         )));
     };
     let failed: Vec<String> = b
@@ -256,11 +316,12 @@ pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Erro
         _ => String::new(),
     };
     Some(Error::VerificationFailed(format!(
-        "{base}; box {}x{}x{}: {}; try other splitting ratios (--ratios X1,X2,X3:Y1,Y2:Z1,Z2) that put each hole in its own cell",
+        "{base}; box {}x{}x{}: {}; {}",
         b.dims[0],
         b.dims[1],
         b.dims[2],
-        if failed.is_empty() { "every subregion passed local verification".to_string() } else { format!("local verification failed in {}", failed.join(", ")) }
+        if failed.is_empty() { "every subregion passed local verification".to_string() } else { format!("local verification failed in {}", failed.join(", ")) },
+        nearest_and_what_to_give(result)
     )))
 }
 

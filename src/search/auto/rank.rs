@@ -104,7 +104,7 @@ pub(super) fn box_order(run: &Run, boxes: &[BoxWork], report: &AutoReport) -> Re
         why.truncate(6);
         let bb = &run.volume.bb;
         return Err(Error::VerificationFailed(format!(
-            "automated mode found no context of genus {}: {}; try splitting ratios that put each hole in its own cell, e.g. --ratios {}",
+            "automated mode found no context of genus {}: {}; no candidate was formed. To go on, give the context you expect (--labels L), constraints you know (--constraints FILE: counts of cubes, THCs and BHCs, allowed cells), or splitting ratios that put each hole in its own cell, e.g. --ratios {}",
             run.genus,
             why.join("; "),
             suggest_ratios(&run.volume.vol, bb.min, bb.max)

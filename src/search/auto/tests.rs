@@ -181,3 +181,87 @@ fn a_full_box_is_trimmed_to_the_budget_keeping_every_cells_best_label() {
     // the least plausible alternatives (the last cells') went first
     assert!(options[NUM_CELLS - 1].len() <= options[1].len(), "{:?}", options.iter().map(|o| o.len()).collect::<Vec<_>>());
 }
+
+/// A candidate of `names` (the first cells; null elsewhere) at `stage` with these fits.
+fn refused_candidate(names: &str, stage: crate::search::generate::Stage, fit: f64, fit_mean: f64) -> crate::search::generate::Candidate {
+    let mut v: Vec<&str> = names.split(',').collect();
+    v.resize(NUM_CELLS, "null");
+    let c = Context::parse(&v.join(",")).unwrap();
+    crate::search::generate::Candidate {
+        context: c,
+        labels: c.label_values(),
+        rotation: String::new(),
+        axis_rotation: crate::polycube::orientation::rotations()[0],
+        occupancy: crate::search::inference::Occupancy { area_fraction: [0.0; 12], in_empty_cells: 0.0, starved_cells: Vec::new() },
+        fit,
+        fit_mean,
+        stage,
+        refusal: None,
+        report: None,
+        fidelity: None,
+        score: None,
+        visible_retry: false,
+        input: None,
+        output: None,
+    }
+}
+
+#[test]
+fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
+    use crate::search::generate::{finish, Stage};
+    let truth = Context::parse("THC+Z,cube,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
+    let (alignment, frame) = crate::geometry::orient::align_axes(&mesh).unwrap();
+    // nothing verified: a TCV failure, two GOCC failures (the better fit first) and
+    // one refused before diffusion; the TCV failure is nearest though its fit is worst
+    let cands = vec![
+        refused_candidate("cube,cube", Stage::Occupancy, 0.001, 0.001),
+        refused_candidate("BHC+Z,cube", Stage::Gocc, 0.03, 0.02),
+        refused_candidate("THC+Z,cube", Stage::Tcv, 0.04, 0.03),
+        refused_candidate("cube,BHC+X", Stage::Gocc, 0.02, 0.01),
+    ];
+    let r = finish(PreparedInput { alignment, frame, samples: Vec::new(), area: 1.0 }, 1, "auto", cands, PolycubeTimings::default(), "test".into());
+    assert!(r.chosen.is_none());
+    let near = nearest_candidates(&r, NEAREST_NAMED);
+    assert_eq!(near.len(), 3, "{near:?}");
+    assert!(near[0].starts_with("THC+Z,cube,null") && near[0].contains("fit 0.0400, mean 0.0300") && near[0].contains("failed TCV"), "{near:?}");
+    assert!(near[1].starts_with("cube,BHC+X") && near[2].starts_with("BHC+Z,cube"), "{near:?}");
+    // the one refused before diffusion with a clean occupancy: the fit limit
+    let all = nearest_candidates(&r, 4);
+    assert!(all[3].starts_with("cube,cube") && all[3].ends_with("refused before diffusion by the fit limit)"), "{all:?}");
+    let local = |cell: usize, verified: &[&str]| LocalResult {
+        subregion: subregion(cell, 0.9, if cell == 0 { 1 } else { 0 }),
+        fits: vec![("THC+Z".into(), 0.01)],
+        kept: vec!["THC+Z".into()],
+        verified: verified.iter().map(|s| s.to_string()).collect(),
+    };
+    let bx = |refused: Option<&str>| BoxResult {
+        dims: [2, 1, 1],
+        ratios: SplitRatios::equal(2, 1, 1),
+        locals: vec![local(0, &[]), local(1, &["cube"])],
+        candidates: 4,
+        best_fit: Some(0.02),
+        best_fit_common: Some(0.02),
+        joint_candidates: 0,
+        refused: refused.map(str::to_string),
+    };
+    let report = |chosen: Option<[usize; 3]>, refused: Option<&str>| AutoReport {
+        resolution: 48,
+        volume_tetrahedra: 0,
+        volume: 1.0,
+        surface_volume: 1.0,
+        volume_relative_error: 0.0,
+        boxes: vec![bx(refused)],
+        chosen_box: chosen,
+    };
+    // the box was tried: its local failures, the nearest candidates, what to give
+    let msg = auto_failure(&r, &report(Some([2, 1, 1]), None)).expect("a refusal").to_string();
+    for want in ["local verification failed in cell 0", "nearest candidates: THC+Z,cube", "cube,BHC+X", "(fit 0.0400, mean 0.0300", "--labels", "--constraints", "--ratios"] {
+        assert!(msg.contains(want), "'{want}' missing from: {msg}");
+    }
+    // every box passed over: the same names
+    let msg = auto_failure(&r, &report(None, Some("no candidate passes the occupancy pre-check and the fit limit"))).expect("a refusal").to_string();
+    for want in ["diffused no candidate", "2x1x1: no candidate passes", "nearest candidates: THC+Z,cube", "--labels", "--constraints", "--ratios"] {
+        assert!(msg.contains(want), "'{want}' missing from: {msg}");
+    }
+}
