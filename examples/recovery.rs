@@ -1,4 +1,4 @@
-//! Issue 5's recovery study: synthetic deformed assemblies the model never saw
+//! The recovery study: synthetic deformed assemblies the model never saw
 //! (seed 5000 by default, not the training seed 42), grouped as the paper's
 //! scalability table (simple 1-3, medium 4-6, complex 7+ occupied cells), each
 //! surface subdivided, smoothly warped, randomly rotated, scaled and moved.

@@ -9,30 +9,63 @@ use crate::spline::{det3, map_from_bezier, scaled_det, BasisKind, Spline};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// VTK text of the spline sampled with `s` sub-cells per direction and element.
-pub fn spline_vtk_string(sp: &Spline, s: usize) -> Result<String> {
+/// The spline sampled on each element's (s+1)^3 grid: points, Jacobian
+/// determinants and scaled Jacobians, element by element, i fastest.
+struct Samples {
+    pts: Vec<[f64; 3]>,
+    det: Vec<f64>,
+    sj: Vec<f64>,
+}
+
+fn sample(sp: &Spline, s: usize) -> Result<Samples> {
     if s == 0 || s > 32 {
         return Err(Error::InvalidArgument(format!("samples per direction must be 1..=32, got {s}")));
     }
     let m = s + 1;
-    let ne = sp.num_elements();
-    let mut pts = Vec::with_capacity(ne * m * m * m);
-    let mut det = Vec::with_capacity(pts.capacity());
-    let mut sj = Vec::with_capacity(pts.capacity());
-    for e in 0..ne {
+    let n = sp.num_elements() * m * m * m;
+    let mut out = Samples { pts: Vec::with_capacity(n), det: Vec::with_capacity(n), sj: Vec::with_capacity(n) };
+    for e in 0..sp.num_elements() {
         let pb = sp.bezier_points(e)?;
         for k in 0..m {
             for j in 0..m {
                 for i in 0..m {
                     let p = [i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64];
                     let (x, jac) = map_from_bezier(&pb, p);
-                    pts.push(x);
-                    det.push(det3(&jac));
-                    sj.push(scaled_det(&jac));
+                    out.pts.push(x);
+                    out.det.push(det3(&jac));
+                    out.sj.push(scaled_det(&jac));
                 }
             }
         }
     }
+    Ok(out)
+}
+
+/// The s^3 linear hexahedra of each of `ne` sampled elements, as point ids in
+/// VTK's node order.
+fn sub_cells(ne: usize, s: usize) -> impl Iterator<Item = [usize; 8]> {
+    let m = s + 1;
+    let id = move |e: usize, i: usize, j: usize, k: usize| e * m * m * m + i + m * (j + m * k);
+    (0..ne * s * s * s).map(move |c| {
+        let (e, r) = (c / (s * s * s), c % (s * s * s));
+        let (i, j, k) = (r % s, (r / s) % s, r / (s * s));
+        [
+            id(e, i, j, k),
+            id(e, i + 1, j, k),
+            id(e, i + 1, j + 1, k),
+            id(e, i, j + 1, k),
+            id(e, i, j, k + 1),
+            id(e, i + 1, j, k + 1),
+            id(e, i + 1, j + 1, k + 1),
+            id(e, i, j + 1, k + 1),
+        ]
+    })
+}
+
+/// VTK text of the spline sampled with `s` sub-cells per direction and element.
+pub fn spline_vtk_string(sp: &Spline, s: usize) -> Result<String> {
+    let Samples { pts, det, sj } = sample(sp, s)?;
+    let ne = sp.num_elements();
     let mut out = String::with_capacity(pts.len() * 80);
     out.push_str("# vtk DataFile Version 3.0\nsddpm TH-spline3D sampled per element\nASCII\nDATASET UNSTRUCTURED_GRID\n");
     let _ = writeln!(out, "POINTS {} double", pts.len());
@@ -41,26 +74,8 @@ pub fn spline_vtk_string(sp: &Spline, s: usize) -> Result<String> {
     }
     let ncell = ne * s * s * s;
     let _ = writeln!(out, "CELLS {} {}", ncell, 9 * ncell);
-    let id = |e: usize, i: usize, j: usize, k: usize| e * m * m * m + i + m * (j + m * k);
-    for e in 0..ne {
-        for k in 0..s {
-            for j in 0..s {
-                for i in 0..s {
-                    let _ = writeln!(
-                        out,
-                        "8 {} {} {} {} {} {} {} {}",
-                        id(e, i, j, k),
-                        id(e, i + 1, j, k),
-                        id(e, i + 1, j + 1, k),
-                        id(e, i, j + 1, k),
-                        id(e, i, j, k + 1),
-                        id(e, i + 1, j, k + 1),
-                        id(e, i + 1, j + 1, k + 1),
-                        id(e, i, j + 1, k + 1)
-                    );
-                }
-            }
-        }
+    for c in sub_cells(ne, s) {
+        let _ = writeln!(out, "8 {} {} {} {} {} {} {} {}", c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]);
     }
     let _ = writeln!(out, "CELL_TYPES {ncell}");
     for _ in 0..ncell {
@@ -99,56 +114,24 @@ pub fn write_spline_vtk(path: &Path, sp: &Spline, samples: usize) -> Result<()> 
 /// [`spline_vtk_string`]; big-endian 32-bit floats and integers, as the legacy
 /// format prescribes): about a fifth of the ASCII size, read by ParaView and VTK.
 pub fn spline_vtk_binary(sp: &Spline, s: usize) -> Result<Vec<u8>> {
-    if s == 0 || s > 32 {
-        return Err(Error::InvalidArgument(format!("samples per direction must be 1..=32, got {s}")));
-    }
-    let m = s + 1;
+    let Samples { pts, det, sj } = sample(sp, s)?;
     let ne = sp.num_elements();
-    let npts = ne * m * m * m;
+    let npts = pts.len();
     let ncell = ne * s * s * s;
     let mut out: Vec<u8> = Vec::with_capacity(20 * npts + 40 * ncell + 512);
     let f32s = |out: &mut Vec<u8>, v: f64| out.extend_from_slice(&(v as f32).to_be_bytes());
     let i32s = |out: &mut Vec<u8>, v: usize| out.extend_from_slice(&(v as i32).to_be_bytes());
-    let mut det = Vec::with_capacity(npts);
-    let mut sj = Vec::with_capacity(npts);
     out.extend_from_slice(format!("# vtk DataFile Version 3.0\nsddpm TH-spline3D sampled per element\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS {npts} float\n").as_bytes());
-    for e in 0..ne {
-        let pb = sp.bezier_points(e)?;
-        for k in 0..m {
-            for j in 0..m {
-                for i in 0..m {
-                    let p = [i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64];
-                    let (x, jac) = map_from_bezier(&pb, p);
-                    for c in x {
-                        f32s(&mut out, c);
-                    }
-                    det.push(det3(&jac));
-                    sj.push(scaled_det(&jac));
-                }
-            }
+    for x in &pts {
+        for &c in x {
+            f32s(&mut out, c);
         }
     }
     out.extend_from_slice(format!("\nCELLS {} {}\n", ncell, 9 * ncell).as_bytes());
-    let id = |e: usize, i: usize, j: usize, k: usize| e * m * m * m + i + m * (j + m * k);
-    for e in 0..ne {
-        for k in 0..s {
-            for j in 0..s {
-                for i in 0..s {
-                    i32s(&mut out, 8);
-                    for v in [
-                        id(e, i, j, k),
-                        id(e, i + 1, j, k),
-                        id(e, i + 1, j + 1, k),
-                        id(e, i, j + 1, k),
-                        id(e, i, j, k + 1),
-                        id(e, i + 1, j, k + 1),
-                        id(e, i + 1, j + 1, k + 1),
-                        id(e, i, j + 1, k + 1),
-                    ] {
-                        i32s(&mut out, v);
-                    }
-                }
-            }
+    for c in sub_cells(ne, s) {
+        i32s(&mut out, 8);
+        for v in c {
+            i32s(&mut out, v);
         }
     }
     out.extend_from_slice(format!("\nCELL_TYPES {ncell}\n").as_bytes());
