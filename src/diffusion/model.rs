@@ -397,14 +397,15 @@ fn prior_tensor(ctx: Tensor<2>, device: &Device, visible: bool) -> Tensor<4> {
 /// whole cell: the prior over j is a Gaussian in rank, exp(-(i - j)^2 / (2 rho^2)),
 /// rho learned (a rank-blind estimate was measured worse than the network at every
 /// t <= 200, one with rho = 12 as good as the network at t >= 60 and better at
-/// t >= 300: `examples/probe_gate`). Modelling a training point as a prior point plus
+/// t >= 300: the probe `probe_gate`, in git history at 19585e7). Modelling a training point as a prior point plus
 /// isotropic jitter of learned size sigma, the forward process gives
 /// y = x_t - qshift_t ~ N(sqrt(ab) p_j, v I) with v = ab sigma^2 + (1 - ab), so the
 /// posterior weights are softmax_j(-|y - sqrt(ab) p_j|^2 / (2 v) - (i - j)^2 / (2 rho^2)) and
 /// E[x_0 | y] = sum_j w_j (p_j + sqrt(ab) sigma^2 / v (y - sqrt(ab) p_j)); its noise is
 /// (y - sqrt(ab) x0_hat) / sqrt(1 - ab). The label decides the p_j, so the estimate
 /// uses the label by construction — the Bayes denoiser for data drawn from the
-/// templates, which `examples/probe_kernel` measured to make the label's shape.
+/// templates, which the probe `probe_kernel` (git history, 19585e7) measured to make
+/// the label's shape.
 #[derive(Module, Debug)]
 pub struct KernelHead {
     /// Per-timestep blend of the network's output towards the estimate's noise.
@@ -432,12 +433,12 @@ pub struct KernelHead {
 }
 
 /// Initial jitter of the template attention, in cell units (the training loss is
-/// flat in it between 0.005 and 0.04, `examples/probe_gate`; generation is not:
+/// flat in it between 0.005 and 0.04, the probe `probe_gate` (19585e7); generation is not:
 /// with 0.01 the decoded points snap to the prior's 512 points and leave gaps, with
-/// 0.03 they stay spread, `examples/probe_kernel` with SIGMA / RHO).
+/// 0.03 they stay spread, the probe `probe_kernel` with SIGMA / RHO).
 pub const KERNEL_SIGMA0: f32 = 0.03;
 /// Initial width of the rank prior (slots; the best of 4 / 12 / 32 / none measured
-/// by `examples/probe_gate`).
+/// by the probe `probe_gate`).
 pub const KERNEL_RHO0: f32 = 12.0;
 
 impl KernelHead {
