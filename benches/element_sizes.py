@@ -7,7 +7,7 @@ to compare a mesh with HexGen's (BENCHMARKS.md "Lattice placement").
     python3 benches/element_sizes.py HEX.vtk [AXIS]
 
 HEX.vtk is a legacy VTK unstructured grid of hexahedra (hex.vtk of `sddpm run`,
-/tmp/voxel_probe.vtk of examples/hex_probe.rs, or a reference_hex mesh). Needs numpy.
+/tmp/voxel_probe.vtk of the probe examples/hex_probe.rs (removed from the tree; `git show 19585e7:examples/hex_probe.rs`), or a reference_hex mesh). Needs numpy.
 """
 import importlib.util
 import os

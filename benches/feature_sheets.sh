@@ -9,6 +9,9 @@
 # figures when compared).
 set -u
 cd "$(dirname "$0")/.."
+# Drives the probe examples/hex_probe.rs, removed from the tree; restore it first:
+#   git show 19585e7:examples/hex_probe.rs > examples/hex_probe.rs
+[ -f examples/hex_probe.rs ] || { echo "examples/hex_probe.rs is not in the tree: git show 19585e7:examples/hex_probe.rs > examples/hex_probe.rs" >&2; exit 1; }
 cargo build --release --example hex_probe >/dev/null 2>&1 || exit 1
 P=target/release/examples/hex_probe
 run() {

@@ -11,7 +11,7 @@ the fit of refined meshes").
 
 HEX.vtk is a legacy VTK unstructured grid of hexahedra with the cell data
 `scaled_jacobian` (hex.vtk of `sddpm run`, /tmp/voxel_probe.vtk of
-examples/hex_probe.rs). Needs numpy.
+the probe examples/hex_probe.rs (removed from the tree; `git show 19585e7:examples/hex_probe.rs`)). Needs numpy.
 """
 import sys
 from collections import Counter

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Write the square torus of the unit tests (src/mesh/tests.rs `square_torus`: a
 3 x 3 x 1 block of unit voxels without the centre one, every face on x, y, z
-integers) as an OBJ file, for examples/hex_probe.rs (BENCHMARKS.md "Features on
+integers) as an OBJ file, for the probe examples/hex_probe.rs (removed from the tree; `git show 19585e7:examples/hex_probe.rs`) (BENCHMARKS.md "Features on
 the lattice").
 
     python3 benches/square_torus.py OUT.obj

@@ -11,7 +11,7 @@ spacing on coarse meshes (HexGen's rod: 0.98 % sampled, 0.48 % exact).
 
 HEX.vtk is a legacy VTK unstructured grid of hexahedra in the input's
 coordinates (hex.vtk of `sddpm run`, or /tmp/voxel_probe.vtk of
-examples/hex_probe.rs). Needs numpy.
+the probe examples/hex_probe.rs (removed from the tree; `git show 19585e7:examples/hex_probe.rs`)). Needs numpy.
 """
 import sys
 from collections import Counter
