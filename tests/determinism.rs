@@ -1,4 +1,4 @@
-//! Determinism and concurrency (issue 9): the same inputs and seed give bit-identical
+//! Determinism and concurrency: the same inputs and seed give bit-identical
 //! outputs run after run, and one model shared by four threads running whole
 //! pipelines at once gives exactly what sequential runs give.
 

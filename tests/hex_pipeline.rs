@@ -1,4 +1,4 @@
-//! Issue 6 tests of the hex stage: perfect grid from a unit box, never worse than the
+//! Tests of the hex stage: perfect grid from a unit box, never worse than the
 //! mapped mesh, THC and BHC inputs with the right volume, orientation, exports.
 
 use sddpm::context::Context;

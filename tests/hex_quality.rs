@@ -1,4 +1,4 @@
-//! The Verdict hex scaled Jacobian against hand-computed values (issue 6).
+//! The Verdict hex scaled Jacobian against hand-computed values.
 
 use sddpm::hex::quality::{histogram, scaled_jacobian, summarize, DEGENERATE};
 

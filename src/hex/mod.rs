@@ -1,5 +1,5 @@
 //! All-hex control mesh: parametric mapping of the polycube, octree subdivision,
-//! pillowing, smoothing and Jacobian optimisation (issue 6). docs/hex.md describes
+//! pillowing, smoothing and Jacobian optimisation. docs/hex.md describes
 //! the method, the frames and every default.
 //!
 //! By concern:

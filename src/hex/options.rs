@@ -20,7 +20,7 @@ pub struct HexOptions {
     pub quality: QualityOptions,
     /// The grid-based fallback ([`super::voxel`]).
     pub fallback: FallbackOptions,
-    /// The quality a mesh should reach (issue 6's goals). Meshes are ranked by
+    /// The quality a mesh should reach. Meshes are ranked by
     /// inverted elements, then by how many goals they miss, then by minimum scaled
     /// Jacobian; when the polycube meshes miss one (and the level is automatic), the
     /// voxel fallback is tried too.

@@ -1,7 +1,7 @@
 //! TH-spline3D: an unstructured tricubic volumetric spline on the all-hex
 //! control mesh, with boundary and sharp-feature rules, a least-squares fit of
 //! the boundary to the input surface, truncated hierarchical local refinement
-//! and Bézier extraction (issue 7). See docs/spline.md for the construction, the
+//! and Bézier extraction. See docs/spline.md for the construction, the
 //! conventions and every default.
 //!
 //! The representation is the Bézier extraction itself: each (leaf) element
