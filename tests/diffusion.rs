@@ -56,8 +56,7 @@ fn a_tiny_model_overfits_a_handful_of_samples() {
     // BENCHMARKS.md); the mean of the last five logged windows (50 steps) is compared,
     // and a factor of 3 below the fresh network is required: 4.8 measured with the
     // other tests of this file alongside, 5.1 alone (the trajectory depends on the
-    // threads the kernels get). Until the thirty-second session a batch of 4 (4.6),
-    // at 2.5x the time.
+    // threads the kernels get). A batch of 4 reaches 4.6 at 2.5x the time.
     assert!(last < first / 3.0, "loss {first} -> {last} (mean of the last 5 windows)");
 }
 

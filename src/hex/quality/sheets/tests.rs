@@ -152,8 +152,8 @@ fn the_rod_meets_every_goal_at_36_voxels_with_every_corner_held() {
 
 #[test]
 fn the_rod_at_33_voxels_releases_every_corner_when_the_concave_ones_leave_it_short() {
-    // hexgen_rod at 33 voxels, default options (the main job's lattice until
-    // the twenty-seventh session): the sheets' mesh misses the minimum at the
+    // hexgen_rod at 33 voxels, default options (a lattice the main job used
+    // to choose): the sheets' mesh misses the minimum at the
     // 4 concave corners; with those released it is valid but 1.06 % away;
     // with all 8 released 0.93 %, every goal met (BENCHMARKS.md "Releasing
     // every corner when the corners at fault are not enough")
@@ -181,8 +181,7 @@ fn the_rod_at_33_voxels_releases_every_corner_when_the_concave_ones_leave_it_sho
 fn the_sheets_of_hepta_are_kept_through_the_inversions_at_20_voxels() {
     // hexgen_hepta's 45-degree chamfers are narrower than a voxel at 20: the
     // two sheets of a chamfer meet and the smoothing leaves 13 elements
-    // inverted (until the twenty-seventh session the sheets were undone
-    // there); the steps after it untangle them, and with the corners whose
+    // inverted (the sheets used to be undone there); the steps after it untangle them, and with the corners whose
     // elements stay below the minimum goal released every goal but the
     // distance is met, much closer than without the sheets (1.07 % against
     // 1.71 %, BENCHMARKS.md "Feature sheets through the inversions")
