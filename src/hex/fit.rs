@@ -27,6 +27,22 @@ pub struct FitStats {
     pub residual_before_snap: f64,
 }
 
+/// Where a boundary node at `x` (mesh normal `normal`) belongs on the surface, and
+/// the surface triangle it then lies on (u32::MAX for a corner or a curve): its
+/// corner, the closest point of its curve, or the closest point among triangles
+/// facing like the mesh there. None for an interior node.
+fn boundary_target(sw: &Surface, role: Role, x: [f64; 3], normal: [f64; 3]) -> Option<([f64; 3], u32)> {
+    match role {
+        Role::Corner(c) => Some((sw.mesh.vertices[c as usize], u32::MAX)),
+        Role::Curve(c) => Some((sw.closest_on_curve(c as usize, x).point, u32::MAX)),
+        Role::Free => {
+            let (q, t, _) = sw.closest_facing(x, normal, FIT_FACING);
+            Some((q, t))
+        }
+        Role::Interior => None,
+    }
+}
+
 /// Pull the boundary of a valid mesh onto the surface in small steps that keep it valid.
 ///
 /// Each round moves every boundary node part of the way to its target (the closest
@@ -49,15 +65,7 @@ pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: u
         for &v in &bnodes {
             let role = w.role[v];
             let x = w.mesh.nodes[v];
-            let (target, tri) = match role {
-                Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
-                Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
-                Role::Free => {
-                    let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
-                    (q, t)
-                }
-                Role::Interior => continue,
-            };
+            let Some((target, tri)) = boundary_target(sw, role, x, nrm[v]) else { continue };
             maxres = maxres.max(norm(sub(target, x)));
             // tangential spreading (Free and Curve nodes)
             let nb: &[u32] = match role {
@@ -95,15 +103,7 @@ pub fn fit_to_surface(w: &mut Work, sw: &Surface, bquads: &[[u32; 4]], rounds: u
     let mut maxres: f64 = 0.0;
     for &v in &bnodes {
         let x = w.mesh.nodes[v];
-        let (target, tri) = match w.role[v] {
-            Role::Corner(c) => (sw.mesh.vertices[c as usize], u32::MAX),
-            Role::Curve(c) => (sw.closest_on_curve(c as usize, x).point, u32::MAX),
-            Role::Free => {
-                let (q, t, _) = sw.closest_facing(x, nrm[v], FIT_FACING);
-                (q, t)
-            }
-            Role::Interior => continue,
-        };
+        let Some((target, tri)) = boundary_target(sw, w.role[v], x, nrm[v]) else { continue };
         maxres = maxres.max(norm(sub(target, x)));
         w.mesh.nodes[v] = target;
         w.attach[v] = tri;
