@@ -32,7 +32,7 @@ fn fingerprint(r: &RunResult) -> Vec<u64> {
             v.extend(o.iter().map(|x| x.to_bits() as u64));
         }
     }
-    v.push(r.candidate as u64);
+    v.push(r.candidate.map_or(u64::MAX, |c| c as u64));
     v.extend(r.hex.mesh.nodes.iter().flatten().map(|x| x.to_bits()));
     v.extend(r.hex.mesh.elements.iter().flatten().map(|&x| x as u64));
     v.extend(r.hex.scaled_jacobian.iter().map(|x| x.to_bits()));

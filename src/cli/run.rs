@@ -189,7 +189,11 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(&command) }, &r, t0.elapsed().as_secs_f64())?;
     if let Some(e) = &r.verification_error {
         if !p.quiet || p.json {
-            eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
+            if r.hex.from_polycube() {
+                eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
+            } else {
+                eprintln!("warning: the mesh comes from the grid-based fallback, not from a polycube: {e}");
+            }
         }
     }
     if let Some(e) = r.hex_attempts.iter().filter(|t| t.candidate.is_none()).find_map(|t| t.error.as_ref()) {
@@ -203,7 +207,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
         let h = &j["hex"];
         eprintln!(
             "polycube {} ({} of {} candidates verified); hex ({}): {} elements, min scaled Jacobian {:.3}, mean {:.3}, {} inverted, Hausdorff {:.2} % of the diagonal; {}wrote {} in {:.1} s",
-            j["polycube"]["description"].as_str().unwrap_or("?"),
+            j["polycube"]["description"].as_str().unwrap_or("none"),
             j["polycube"]["verified"],
             j["polycube"]["candidates"],
             r.hex.domain,

@@ -174,8 +174,10 @@ pub struct HexAttempt {
 pub struct RunResult {
     pub polycube: PolycubeResult,
     pub auto: Option<AutoReport>,
-    /// Index (into `polycube.candidates`) of the candidate that was meshed and kept.
-    pub candidate: usize,
+    /// Index (into `polycube.candidates`) of the candidate that was meshed and kept;
+    /// for a grid-based fallback mesh, the best polycube attempt's, or None when no
+    /// candidate was formed (a part the grid cannot hold).
+    pub candidate: Option<usize>,
     pub hex_attempts: Vec<HexAttempt>,
     /// False when the meshed candidate did not pass verification (`accept_unverified`).
     pub verified: bool,
@@ -265,8 +267,9 @@ pub fn run(
 /// What the hex stage of the main job made of a polycube result ([`mesh_polycube`]).
 pub struct HexStage {
     /// Index (into the polycube's candidates) of the candidate whose mesh was kept
-    /// (for the grid-based fallback: the best polycube attempt's, or the first).
-    pub candidate: usize,
+    /// (for the grid-based fallback: the best polycube attempt's, or the first; None
+    /// when there was no candidate to mesh).
+    pub candidate: Option<usize>,
     /// Every hex build, in order.
     pub attempts: Vec<HexAttempt>,
     /// False when the mesh does not come from a verified candidate's polycube.
@@ -296,9 +299,18 @@ pub fn mesh_polycube(pr: &mut PolycubeResult, err: Option<Error>, mesh: &TriMesh
     let order = hex_order(pr, err, opts)?;
     let (candidate, attempts, hex) = build_hex_for_polycube(pr, &order, mesh, &hex_opts, progress)?;
     let voxel = !hex.from_polycube();
-    let verified = !voxel && pr.candidates[candidate].stage == crate::search::generate::Stage::Verified;
+    let verified = !voxel && candidate.is_some_and(|c| pr.candidates[c].stage == crate::search::generate::Stage::Verified);
+    let polycube_meshes = attempts.iter().any(|a| a.candidate.is_some());
     let verification_error = match (verified, verification_error) {
         (true, _) => None,
+        // nothing to mesh from a polycube: the polycube stage's refusal says why
+        (false, Some(e)) if voxel && !polycube_meshes => Some(format!(
+            "no polycube was meshed: {e}; the mesh comes from the grid-based fallback ({}: min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %)",
+            hex.domain,
+            hex.quality.min,
+            hex.quality.mean,
+            100.0 * hex.hausdorff_relative
+        )),
         (false, _) if voxel => Some(format!(
             "no polycube candidate's hex mesh met the quality goals (best: {}); the mesh comes from the grid-based fallback ({}: min scaled Jacobian {:.3}, mean {:.3}, Hausdorff {:.2} %), which ranks better, not from the polycube",
             attempts
@@ -315,7 +327,7 @@ pub fn mesh_polycube(pr: &mut PolycubeResult, err: Option<Error>, mesh: &TriMesh
         (false, Some(e)) => Some(e),
         (false, None) => Some(format!(
             "the hex meshes of the verified candidates ranked below (inverted elements, then quality goals missed) the mesh of unverified candidate {}",
-            pr.candidates[candidate].context
+            candidate.map(|c| pr.candidates[c].context.to_string()).unwrap_or_default()
         )),
     };
     if opts.require_valid_hex && hex.quality.inverted > 0 {
@@ -325,7 +337,7 @@ pub fn mesh_polycube(pr: &mut PolycubeResult, err: Option<Error>, mesh: &TriMesh
             hex.quality.inverted,
             hex.quality.elements,
             bad.join(", element "),
-            pr.candidates[candidate].context,
+            candidate.map(|c| pr.candidates[c].context.to_string()).unwrap_or_else(|| "(none: grid-based fallback)".into()),
             if verified { "" } else { " (unverified)" }
         )));
     }
@@ -345,7 +357,9 @@ pub fn hex_order(pr: &mut PolycubeResult, err: Option<Error>, opts: &RunOptions)
             // the diffused candidates by fit, then refused ones laid out without
             // diffusion (the hex stage then works from the geometry alone)
             let order = fallback_order(pr, &opts.polycube, k);
-            if order.is_empty() {
+            // nothing to mesh from a polycube (no candidate was formed: a part the
+            // grid cannot hold): the grid-based fallback alone, when it is on
+            if order.is_empty() && !opts.hex.fallback.enabled {
                 return Err(e);
             }
             order
@@ -504,9 +518,9 @@ fn build_hex_for_polycube(
     mesh: &TriMesh,
     hex_opts: &HexOptions,
     progress: &mut dyn Progress,
-) -> Result<(usize, Vec<HexAttempt>, HexResult)> {
+) -> Result<(Option<usize>, Vec<HexAttempt>, HexResult)> {
     let goals = &hex_opts.goals;
-    let mut best: Option<(usize, HexResult)> = None;
+    let mut best: Option<(Option<usize>, HexResult)> = None;
     let mut attempts = Vec::new();
     let n = order.len();
     let mut last_err = None;
@@ -527,7 +541,7 @@ fn build_hex_for_polycube(
         };
         attempts.push(HexAttempt::of(Some(ci), cand.context.names(), &r, goals, th));
         if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {
-            best = Some((ci, r));
+            best = Some((Some(ci), r));
         }
         if best.as_ref().is_some_and(|(_, b)| goals.missed(b) == 0) {
             break; // good enough: do not spend another build
@@ -546,7 +560,7 @@ fn build_hex_for_polycube(
                 attempts.push(HexAttempt::of(None, r.domain.to_string(), &r, goals, th));
                 if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {
                     // the candidate index stays the best polycube attempt's (or the first)
-                    let ci = best.as_ref().map(|(c, _)| *c).or(order.first().copied()).unwrap_or(0);
+                    let ci = best.as_ref().and_then(|(c, _)| *c).or(order.first().copied());
                     best = Some((ci, r));
                 }
             }

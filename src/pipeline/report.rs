@@ -125,12 +125,16 @@ fn esc(s: &str) -> String {
 pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seconds: f64) -> Result<Value> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir.display(), e))?;
     let t_write = std::time::Instant::now();
-    let cand = &r.polycube.candidates[r.candidate];
-    let poly = super::polycube_user_mesh(&r.polycube, cand);
+    // no candidate was formed for a part the grid cannot hold: no polycube.obj,
+    // polycube.png or polycube labels then
+    let cand = r.candidate.map(|c| &r.polycube.candidates[c]);
+    let poly = cand.map(|c| super::polycube_user_mesh(&r.polycube, c));
     // the files written, in order (report.json's "files")
     let mut written: Vec<String> = Vec::new();
-    crate::export::obj::write_obj(&dir.join(POLYCUBE_OBJ), &poly, &format!("libsddpm polycube {} (user coordinates)", cand.context))?;
-    written.push(POLYCUBE_OBJ.into());
+    if let (Some(cand), Some(poly)) = (cand, &poly) {
+        crate::export::obj::write_obj(&dir.join(POLYCUBE_OBJ), poly, &format!("libsddpm polycube {} (user coordinates)", cand.context))?;
+        written.push(POLYCUBE_OBJ.into());
+    }
     crate::export::hexfmt::write_hex_files(dir, &r.hex)?;
     for f in [crate::hex::report::HEX_VTU, crate::hex::report::HEX_VTK, crate::hex::report::HEX_MESH, crate::hex::report::HEX_K] {
         written.push(f.into());
@@ -160,24 +164,25 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
         }
     };
     pic("input.png", &[Layer::Surface { vertices: &input.mesh.vertices, triangles: &input.mesh.triangles, edges: &[], colour: [200, 200, 210] }]);
-    let qm = crate::polycube::boundary(&cand.context.assemble());
-    let pq = poly.clone();
-    let pedges: Vec<[u32; 2]> = {
-        // the quad edges of the polycube boundary (its triangles come two per quad)
-        let mut e = std::collections::BTreeSet::new();
-        for q in &qm.quads {
-            for i in 0..4 {
-                let (a, b) = (q[i], q[(i + 1) % 4]);
-                e.insert([a.min(b), a.max(b)]);
+    if let (Some(cand), Some(pq)) = (cand, &poly) {
+        let qm = crate::polycube::boundary(&cand.context.assemble());
+        let pedges: Vec<[u32; 2]> = {
+            // the quad edges of the polycube boundary (its triangles come two per quad)
+            let mut e = std::collections::BTreeSet::new();
+            for q in &qm.quads {
+                for i in 0..4 {
+                    let (a, b) = (q[i], q[(i + 1) % 4]);
+                    e.insert([a.min(b), a.max(b)]);
+                }
             }
-        }
-        if pq.vertices.len() == qm.vertices.len() {
-            e.into_iter().collect()
-        } else {
-            Vec::new()
-        }
-    };
-    pic("polycube.png", &[Layer::Surface { vertices: &pq.vertices, triangles: &pq.triangles, edges: &pedges, colour: [120, 170, 230] }]);
+            if pq.vertices.len() == qm.vertices.len() {
+                e.into_iter().collect()
+            } else {
+                Vec::new()
+            }
+        };
+        pic("polycube.png", &[Layer::Surface { vertices: &pq.vertices, triangles: &pq.triangles, edges: &pedges, colour: [120, 170, 230] }]);
+    }
     let (ht, he) = hex_boundary(&r.hex.mesh.elements);
     let he = if he.len() > 60_000 { Vec::new() } else { he };
     pic("hex.png", &[Layer::Surface { vertices: &r.hex.mesh.nodes, triangles: &ht, edges: &he, colour: [230, 180, 120] }]);
@@ -227,7 +232,7 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
     let mesh_path = json!({
         "from": if from_polycube { "polycube" } else { "grid-based fallback" },
         "domain": r.hex.domain,
-        "polycube": from_polycube.then(|| cand.context.describe()),
+        "polycube": cand.filter(|_| from_polycube).map(|c| c.context.describe()),
         "verified": r.verified,
         "why": mesh_path_reason(r),
     });
@@ -242,9 +247,9 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
             "bbox": [rep.bbox_min, rep.bbox_max],
         },
         "polycube": {
-            "labels": cand.labels.to_vec(),
-            "names": cand.context.names(),
-            "description": cand.context.describe(),
+            "labels": cand.map(|c| c.labels.to_vec()),
+            "names": cand.map(|c| c.context.names()),
+            "description": cand.map(|c| c.context.describe()),
             "source": r.polycube.source,
             "generator": r.polycube.generator,
             "candidates": r.polycube.candidates.len(),
@@ -252,11 +257,11 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
             // candidates that went through the diffusion (the others were refused
             // by the pre-check or the fit limit)
             "diffused": r.polycube.candidates.iter().filter(|c| c.report.is_some()).count(),
-            "genus": cand.context.validity().genus,
-            "rotation": cand.rotation,
-            "fit": cand.fit,
-            "score": cand.score,
-            "file": POLYCUBE_OBJ,
+            "genus": cand.and_then(|c| c.context.validity().genus),
+            "rotation": cand.map(|c| c.rotation.clone()),
+            "fit": cand.map(|c| c.fit),
+            "score": cand.and_then(|c| c.score),
+            "file": cand.map(|_| POLYCUBE_OBJ),
             "verified_choice": r.verified,
             "verification_error": r.verification_error,
             "timings": r.polycube.timings,
@@ -291,10 +296,9 @@ pub fn write_run_folder(dir: &Path, input: &InputInfo, r: &RunResult, total_seco
 
 /// Why the mesh comes from where it does (report.json "mesh_path.why").
 fn mesh_path_reason(r: &RunResult) -> String {
-    let cand = &r.polycube.candidates[r.candidate];
     match (&r.verification_error, r.hex.from_polycube()) {
         (None, true) => {
-            let d = cand.context.describe();
+            let d = r.candidate.map(|c| r.polycube.candidates[c].context.describe()).unwrap_or_default();
             if r.options.hex.goals.missed(&r.hex) == 0 {
                 return format!("the hex mesh of the verified polycube {d} meets every quality goal");
             }
@@ -382,7 +386,7 @@ code{font-size:12px;word-break:break-all}\
         s,
         "<p class=\"path\" id=\"mesh-path\"><b>Mesh made by: {}</b> ({})</p><p>{}</p>",
         esc(path["from"].as_str().unwrap_or("?")),
-        if fallback { format!("lattice {}", esc(path["domain"].as_str().unwrap_or("?"))) } else { format!("polycube {}", esc(&r.polycube.candidates[r.candidate].context.describe())) },
+        if fallback { format!("lattice {}", esc(path["domain"].as_str().unwrap_or("?"))) } else { format!("polycube {}", esc(&r.candidate.map(|c| r.polycube.candidates[c].context.describe()).unwrap_or_default())) },
         esc(path["why"].as_str().unwrap_or(""))
     );
     s.push_str("<h2>Quality goals</h2><table id=\"goals\"><tr><th>goal</th><th>target</th><th>value</th><th>result</th></tr>");
@@ -456,7 +460,7 @@ code{font-size:12px;word-break:break-all}\
                 Some(rep) => (format!("{:.4}", rep.mean_target_pcd), rep.reason.clone().unwrap_or_default()),
                 None => ("-".into(), c.refusal.clone().unwrap_or_default()),
             };
-            let chosen = if i == r.candidate && !fallback { " (meshed)" } else { "" };
+            let chosen = if Some(i) == r.candidate && !fallback { " (meshed)" } else { "" };
             let _ = write!(
                 s,
                 "<tr><td>{i}{chosen}</td><td>{}</td><td>{}</td><td class=\"{cls}\">{stage}</td><td>{:.4}</td><td>{}</td><td>{pcd}</td><td>{}</td></tr>",

@@ -162,6 +162,10 @@ pub struct AutoReport {
     pub volume_relative_error: f64,
     pub boxes: Vec<BoxResult>,
     pub chosen_box: Option<[usize; 3]>,
+    /// Why no candidate was formed at all (no occupied box and labelling of the grid
+    /// holds the input's genus and subregions); None when some box had candidates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub no_candidate: Option<String>,
 }
 
 /// What every step of one automated run reads.
@@ -204,8 +208,17 @@ pub fn generate_auto(
     timings.precheck += t0.elapsed().as_secs_f64();
     check_progress(progress, 0.3, "global candidates")?;
     rank::rank_candidates(&run, &mut boxes, &mut report);
-    let order = rank::box_order(&run, &boxes, &report)?;
-    let candidates = global::try_boxes(&run, model, &mut boxes, &order, &mut report, progress, &mut timings)?;
+    // no box with a candidate is not an error here: the result has no candidate and
+    // [`auto_failure`] names why, so that the main job can still mesh the part with
+    // the grid-based fallback
+    let candidates = match rank::box_order(&run, &boxes, &report) {
+        Ok(order) => global::try_boxes(&run, model, &mut boxes, &order, &mut report, progress, &mut timings)?,
+        Err(Error::VerificationFailed(why)) => {
+            report.no_candidate = Some(why);
+            Vec::new()
+        }
+        Err(e) => return Err(e),
+    };
     timings.total = t_all.elapsed().as_secs_f64();
     let result = finish(input, input_genus, "auto", candidates, timings, model.generator_name(opts.sampler.kernel_gate));
     Ok((result, report))
@@ -223,6 +236,7 @@ impl AutoReport {
             volume_relative_error: (vol.volume() - surface_volume).abs() / surface_volume.max(1e-300),
             boxes: Vec::new(),
             chosen_box: None,
+            no_candidate: None,
         }
     }
 }
@@ -291,6 +305,9 @@ fn nearest_and_what_to_give(result: &PolycubeResult) -> String {
 pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Error> {
     if result.chosen.is_some() {
         return None;
+    }
+    if let Some(why) = &report.no_candidate {
+        return Some(Error::VerificationFailed(why.clone()));
     }
     let Some(b) = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box) else {
         // no box was tried: every box was refused or passed over

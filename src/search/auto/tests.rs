@@ -252,6 +252,7 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
         surface_volume: 1.0,
         volume_relative_error: 0.0,
         boxes: vec![bx(refused)],
+        no_candidate: None,
         chosen_box: chosen,
     };
     // the box was tried: its local failures, the nearest candidates, what to give

@@ -68,6 +68,7 @@ fn report(a: LocalResult, b: LocalResult, chosen: bool) -> AutoReport {
         surface_volume: 1.0,
         volume_relative_error: 0.0,
         boxes: vec![BoxResult { dims: [2, 1, 1], ratios: SplitRatios::equal(2, 1, 1), locals: vec![a, b], candidates: 6, best_fit: Some(0.01), best_fit_common: Some(0.01), joint_candidates: 0, refused: None }],
+        no_candidate: None,
         chosen_box: chosen.then_some([2, 1, 1]),
     }
 }
