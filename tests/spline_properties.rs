@@ -168,3 +168,19 @@ fn spline_rejects_bad_input() {
     let mut sp2 = sp.clone();
     assert!(sp2.refine(&[7]).is_err());
 }
+
+#[test]
+fn spline_report_gives_the_share_of_c2_faces() {
+    // a regular block: every interior face is C2
+    let sp = build(&meshes::block([3, 3, 3], [1.0, 1.0, 1.0]), &SplineOptions::default());
+    let r = sp.report();
+    assert_eq!((r.c2_faces, r.interior_faces), (54, 54), "{r:?}");
+    assert_eq!(r.c2_face_share, 1.0);
+    // an extraordinary edge of valence 5: the faces at it lose C2, the others keep it
+    let sp = build(&meshes::extraordinary_edge(5, 2, 3), &SplineOptions::default());
+    let r = sp.report();
+    assert!(r.interior_faces > 0 && r.c2_faces < r.interior_faces, "{r:?}");
+    assert!(r.c2_face_share > 0.0 && r.c2_face_share < 1.0, "{r:?}");
+    let c = check::continuity(&sp, 2, None);
+    assert_eq!(r.interior_faces - r.c2_faces, c.regular.faces_c2_broken + c.other.faces_c2_broken);
+}

@@ -533,6 +533,7 @@ code{font-size:12px;word-break:break-all}\
             ("elements", num(&sp["elements"])),
             ("basis functions", num(&sp["basis_functions"])),
             ("extraordinary edges", num(&sp["extraordinary_edges"])),
+            ("C2 interior faces", format!("{} of {} ({:.1} %)", num(&sp["c2_faces"]), num(&sp["interior_faces"]), 100.0 * sp["c2_face_share"].as_f64().unwrap_or(0.0))),
             ("min scaled Jacobian (Gauss points)", num(&sp["min_scaled_jacobian"])),
             ("elements with det J <= 0", num(&sp["negative_jacobian_elements"])),
             ("repaired elements", num(&sp["repaired_elements"])),

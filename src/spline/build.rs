@@ -145,6 +145,16 @@ impl Spline {
         r.negative_jacobian_elements = q.negative_elements;
     }
 
+    /// The C2 share of the interior faces ([`SplineReport::c2_faces`]).
+    pub fn update_continuity(&mut self) {
+        let c = check::continuity(self, 2, None);
+        let faces = c.regular.faces + c.other.faces;
+        let c2 = faces - c.regular.faces_c2_broken - c.other.faces_c2_broken;
+        self.report.interior_faces = faces;
+        self.report.c2_faces = c2;
+        self.report.c2_face_share = if faces > 0 { c2 as f64 / faces as f64 } else { 0.0 };
+    }
+
     /// Remove basis functions that vanish everywhere and renumber.
     pub(super) fn compact(&mut self) {
         let mut used = vec![false; self.ctrl.len()];
