@@ -204,9 +204,6 @@ pub fn boundary_element_distances(sp: &Spline, loc: &SurfaceLocator, samples: us
 
 /// Fit the boundary control points (see the module documentation).
 pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, fo: &FitOptions) -> Result<()> {
-    use faer::linalg::solvers::Solve;
-    use faer::sparse::{SparseColMat, Triplet};
-    use rayon::prelude::*;
     if fo.samples == 0 || !(fo.regularization.is_finite() && fo.regularization > 0.0) {
         return Err(Error::InvalidArgument("fit samples must be >= 1 and regularization > 0".into()));
     }
@@ -214,9 +211,27 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, 
     if faces.is_empty() || fo.iterations == 0 {
         return Ok(());
     }
-    let m = fo.samples;
-    // sample rows: (ids, values) per sample
-    let rows: Vec<(Vec<u32>, Vec<f64>)> = faces
+    let rows = forward_rows(sp, &faces, fo.samples);
+    let sys = FitSystem::new(sp, rows, fo);
+    for _ in 0..fo.iterations {
+        let p0: Vec<[f64; 3]> = sys.unknowns.iter().map(|&i| sp.ctrl[i as usize]).collect();
+        let targets = forward_targets(sp, &sys.rows, loc);
+        // reverse rows: every surface vertex pulls the closest point of the
+        // (sampled, triangulated) spline boundary towards it
+        let rev = if fo.two_sided { reverse_rows(sp, &faces, 2 * fo.samples, surf, fo, &sys.local) } else { Vec::new() };
+        let solution = sys.solve(&targets, &rev, &p0)?;
+        sys.apply_with_backtracking(sp, &p0, &solution, fo);
+    }
+    Ok(())
+}
+
+/// One least-squares row: the basis functions (ids) and their values at a point.
+type Row = (Vec<u32>, Vec<f64>);
+
+/// The forward rows: `m` x `m` samples on every boundary face.
+fn forward_rows(sp: &Spline, faces: &[(usize, usize, usize)], m: usize) -> Vec<Row> {
+    use rayon::prelude::*;
+    faces
         .par_iter()
         .flat_map_iter(|&(e, d, s)| {
             let el = &sp.elems[e];
@@ -235,120 +250,77 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, 
                 (ids, vals)
             })
         })
-        .collect();
-    // unknowns
-    let mut local = vec![u32::MAX; sp.ctrl.len()];
-    let mut unknowns: Vec<u32> = Vec::new();
-    for (ids, _) in &rows {
-        for &i in ids {
-            if local[i as usize] == u32::MAX {
-                local[i as usize] = unknowns.len() as u32;
-                unknowns.push(i);
+        .collect()
+}
+
+/// The unknowns of the fit (functions of the rows), their Tikhonov weight and the
+/// elements they touch with the quality floor of each.
+struct FitSystem {
+    rows: Vec<Row>,
+    /// Global function id -> unknown index (u32::MAX: not an unknown).
+    local: Vec<u32>,
+    unknowns: Vec<u32>,
+    lambda: f64,
+    touched: Vec<usize>,
+    floor: Vec<f64>,
+}
+
+impl FitSystem {
+    fn new(sp: &Spline, rows: Vec<Row>, fo: &FitOptions) -> FitSystem {
+        let mut local = vec![u32::MAX; sp.ctrl.len()];
+        let mut unknowns: Vec<u32> = Vec::new();
+        for (ids, _) in &rows {
+            for &i in ids {
+                if local[i as usize] == u32::MAX {
+                    local[i as usize] = unknowns.len() as u32;
+                    unknowns.push(i);
+                }
             }
         }
-    }
-    let n = unknowns.len();
-    // Tikhonov weight from the forward rows (fixed over the iterations)
-    let mut diag = vec![0.0; n];
-    for (ids, vals) in &rows {
-        for (a, &ia) in ids.iter().enumerate() {
-            diag[local[ia as usize] as usize] += vals[a] * vals[a];
+        let n = unknowns.len();
+        // Tikhonov weight from the forward rows (fixed over the iterations)
+        let mut diag = vec![0.0; n];
+        for (ids, vals) in &rows {
+            for (a, &ia) in ids.iter().enumerate() {
+                diag[local[ia as usize] as usize] += vals[a] * vals[a];
+            }
         }
-    }
-    let lambda = fo.regularization * diag.iter().sum::<f64>() / n.max(1) as f64;
-    let kf = 2 * m;
-    // elements touched by the unknowns (for the Jacobian safeguard)
-    let touched: Vec<usize> = (0..sp.elems.len())
-        .filter(|&e| sp.elems[e].basis.iter().any(|&b| local[b as usize] != u32::MAX))
-        .collect();
-    // quality floor per element: the fit may lower an element's minimum scaled
-    // Jacobian to half its value (at most to 0.1), never below
-    let floor: Vec<f64> = {
-        use rayon::prelude::*;
-        let spr: &Spline = sp;
-        touched
-            .par_iter()
-            .map(|&e| {
-                let b = check::element_strict(spr, e);
-                if b > 0.0 {
-                    (0.5 * b).min(0.1)
-                } else {
-                    b
-                }
-            })
-            .collect()
-    };
-    for _ in 0..fo.iterations {
-        let p0: Vec<[f64; 3]> = unknowns.iter().map(|&i| sp.ctrl[i as usize]).collect();
-        // targets
-        let targets: Vec<[f64; 3]> = rows
-            .par_iter()
-            .map(|(ids, vals)| {
-                let mut x = [0.0; 3];
-                for (k, &i) in ids.iter().enumerate() {
-                    let c = sp.ctrl[i as usize];
-                    for j in 0..3 {
-                        x[j] += vals[k] * c[j];
-                    }
-                }
-                loc.closest(x).0
-            })
+        let lambda = fo.regularization * diag.iter().sum::<f64>() / n.max(1) as f64;
+        // elements touched by the unknowns (for the Jacobian safeguard)
+        let touched: Vec<usize> = (0..sp.elems.len())
+            .filter(|&e| sp.elems[e].basis.iter().any(|&b| local[b as usize] != u32::MAX))
             .collect();
-        // reverse rows: every surface vertex pulls the closest point of the
-        // (sampled, triangulated) spline boundary towards it
-        let mut rev: Vec<(Vec<u32>, Vec<f64>, [f64; 3])> = Vec::new();
-        if fo.two_sided {
+        // quality floor per element: the fit may lower an element's minimum scaled
+        // Jacobian to half its value (at most to 0.1), never below
+        let floor: Vec<f64> = {
+            use rayon::prelude::*;
             let spr: &Spline = sp;
-            let params: Vec<(usize, [f64; 3])> = faces
-                .iter()
-                .flat_map(|&(e, d, s)| (0..kf * kf).map(move |k| (e, face_param(d, s, k % kf, k / kf, kf, false))))
-                .collect();
-            let mut tri = TriMesh { vertices: params.par_iter().map(|&(e, p)| point_of(spr, e, p)).collect(), triangles: Vec::new() };
-            for fi in 0..faces.len() {
-                let base = (fi * kf * kf) as u32;
-                for b in 0..kf - 1 {
-                    for a in 0..kf - 1 {
-                        let i0 = base + (b * kf + a) as u32;
-                        let (i1, i2, i3) = (i0 + 1, i0 + 1 + kf as u32, i0 + kf as u32);
-                        tri.triangles.push([i0, i1, i2]);
-                        tri.triangles.push([i0, i2, i3]);
-                    }
-                }
-            }
-            let bl = SurfaceLocator::new(&tri);
-            let stride = surf.vertices.len().div_ceil(fo.max_reverse_points.max(1)).max(1);
-            rev = surf
-                .vertices
+            touched
                 .par_iter()
-                .step_by(stride)
-                .filter_map(|&q| {
-                    let c = bl.closest_detailed(q)?;
-                    let t = tri.triangles[c.triangle as usize];
-                    let e = params[t[0] as usize].0;
-                    let mut p = [0.0; 3];
-                    for (k, &vi) in t.iter().enumerate() {
-                        for d in 0..3 {
-                            p[d] += c.bary[k] * params[vi as usize].1[d];
-                        }
+                .map(|&e| {
+                    let b = check::element_strict(spr, e);
+                    if b > 0.0 {
+                        (0.5 * b).min(0.1)
+                    } else {
+                        b
                     }
-                    let el = &spr.elems[e];
-                    let v = apply_rows(&el.op, &bernstein::values(p));
-                    let mut ids = Vec::new();
-                    let mut vals = Vec::new();
-                    for (r, &x) in v.iter().enumerate() {
-                        if x.abs() > 1e-13 && local[el.basis[r] as usize] != u32::MAX {
-                            ids.push(el.basis[r]);
-                            vals.push(x);
-                        }
-                    }
-                    (!ids.is_empty()).then_some((ids, vals, q))
                 })
-                .collect();
-        }
-        // normal equations of this round
+                .collect()
+        };
+        FitSystem { rows, local, unknowns, lambda, touched, floor }
+    }
+
+    /// The regularised normal equations of one round (forward rows to `targets`,
+    /// reverse rows to their surface points, Tikhonov pull to `p0`), solved by sparse
+    /// Cholesky: the new positions of the unknowns, one row each.
+    fn solve(&self, targets: &[[f64; 3]], rev: &[(Vec<u32>, Vec<f64>, [f64; 3])], p0: &[[f64; 3]]) -> Result<faer::Mat<f64>> {
+        use faer::linalg::solvers::Solve;
+        use faer::sparse::{SparseColMat, Triplet};
+        let (local, lambda, n) = (&self.local, self.lambda, self.unknowns.len());
+        let rows = &self.rows;
         let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
         let mut rhs = faer::Mat::<f64>::zeros(n, 3);
-        let all = rows.iter().zip(&targets).map(|((i, v), t)| (i, v, t)).chain(rev.iter().map(|(i, v, t)| (i, v, t)));
+        let all = rows.iter().zip(targets).map(|((i, v), t)| (i, v, t)).chain(rev.iter().map(|(i, v, t)| (i, v, t)));
         for (ids, vals, t) in all {
             for (a, &ia) in ids.iter().enumerate() {
                 let la = local[ia as usize] as usize;
@@ -375,8 +347,15 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, 
             .sp_cholesky(faer::Side::Lower)
             .map_err(|e| Error::SplineFailed(format!("fit factorisation: {e:?}")))?;
         llt.solve_in_place(rhs.as_mut());
-        // per-function step lengths, halved on the functions of every element
-        // that would fall below its floor
+        Ok(rhs)
+    }
+
+    /// Move the unknowns to `solution` with per-function step lengths, halved on the
+    /// functions of every element that would fall below its floor; after the last
+    /// halving a round that still breaks an element is dropped.
+    fn apply_with_backtracking(&self, sp: &mut Spline, p0: &[[f64; 3]], rhs: &faer::Mat<f64>, fo: &FitOptions) {
+        use rayon::prelude::*;
+        let (local, unknowns, touched, floor, n) = (&self.local, &self.unknowns, &self.touched, &self.floor, self.unknowns.len());
         let mut alpha = vec![1.0f64; n];
         for round in 0..=fo.max_backtracks {
             for (l, &i) in unknowns.iter().enumerate() {
@@ -422,7 +401,76 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, 
             }
         }
     }
-    Ok(())
+}
+
+/// Each forward row's target: the closest surface point to the row's current point.
+fn forward_targets(sp: &Spline, rows: &[Row], loc: &SurfaceLocator) -> Vec<[f64; 3]> {
+    use rayon::prelude::*;
+    rows
+        .par_iter()
+        .map(|(ids, vals)| {
+            let mut x = [0.0; 3];
+            for (k, &i) in ids.iter().enumerate() {
+                let c = sp.ctrl[i as usize];
+                for j in 0..3 {
+                    x[j] += vals[k] * c[j];
+                }
+            }
+            loc.closest(x).0
+        })
+        .collect()
+}
+
+/// The reverse rows: every (strided) surface vertex with the closest point of the
+/// spline boundary sampled `kf` x `kf` per face and triangulated.
+fn reverse_rows(sp: &Spline, faces: &[(usize, usize, usize)], kf: usize, surf: &TriMesh, fo: &FitOptions, local: &[u32]) -> Vec<(Vec<u32>, Vec<f64>, [f64; 3])> {
+    use rayon::prelude::*;
+    let spr = sp;
+    let params: Vec<(usize, [f64; 3])> = faces
+        .iter()
+        .flat_map(|&(e, d, s)| (0..kf * kf).map(move |k| (e, face_param(d, s, k % kf, k / kf, kf, false))))
+        .collect();
+    let mut tri = TriMesh { vertices: params.par_iter().map(|&(e, p)| point_of(spr, e, p)).collect(), triangles: Vec::new() };
+    for fi in 0..faces.len() {
+        let base = (fi * kf * kf) as u32;
+        for b in 0..kf - 1 {
+            for a in 0..kf - 1 {
+                let i0 = base + (b * kf + a) as u32;
+                let (i1, i2, i3) = (i0 + 1, i0 + 1 + kf as u32, i0 + kf as u32);
+                tri.triangles.push([i0, i1, i2]);
+                tri.triangles.push([i0, i2, i3]);
+            }
+        }
+    }
+    let bl = SurfaceLocator::new(&tri);
+    let stride = surf.vertices.len().div_ceil(fo.max_reverse_points.max(1)).max(1);
+    surf
+        .vertices
+        .par_iter()
+        .step_by(stride)
+        .filter_map(|&q| {
+            let c = bl.closest_detailed(q)?;
+            let t = tri.triangles[c.triangle as usize];
+            let e = params[t[0] as usize].0;
+            let mut p = [0.0; 3];
+            for (k, &vi) in t.iter().enumerate() {
+                for d in 0..3 {
+                    p[d] += c.bary[k] * params[vi as usize].1[d];
+                }
+            }
+            let el = &spr.elems[e];
+            let v = apply_rows(&el.op, &bernstein::values(p));
+            let mut ids = Vec::new();
+            let mut vals = Vec::new();
+            for (r, &x) in v.iter().enumerate() {
+                if x.abs() > 1e-13 && local[el.basis[r] as usize] != u32::MAX {
+                    ids.push(el.basis[r]);
+                    vals.push(x);
+                }
+            }
+            (!ids.is_empty()).then_some((ids, vals, q))
+        })
+        .collect()
 }
 
 impl Spline {
