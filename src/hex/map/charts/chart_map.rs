@@ -1,7 +1,8 @@
 //! The map of one chart onto its polycube face: the chart's boundary loop onto the
 //! face's boundary polygon (corner vertices onto the polycube corners, arc length
 //! between them), the interior by a Tutte embedding (mean-value or uniform weights,
-//! one sparse solve), then a count of the triangles that come out flipped. On a
+//! one sparse solve), then a count of the triangles that come out flipped or
+//! without area (an ear: three vertices on one straight boundary run). On a
 //! convex face (a rectangle) the embedding is bijective by Tutte's and Floater's
 //! theorems; on a non-convex face (an L) it may fold, which the count shows.
 
@@ -23,8 +24,11 @@ pub struct ChartMap {
     pub positions: Vec<[f64; 3]>,
     /// The chart's triangles (input triangle ids).
     pub triangles: Vec<u32>,
-    /// Triangles whose image is flipped or degenerate (signed area <= 0).
+    /// Triangles whose image is flipped (negative signed area).
     pub flipped: usize,
+    /// Triangles whose image has no area: those with their three vertices on one
+    /// straight run of the boundary (a chart boundary that cuts off an ear).
+    pub degenerate: usize,
     /// Is the face convex (the embedding is then bijective by construction)?
     pub convex: bool,
 }
@@ -96,14 +100,18 @@ pub fn map_chart(
     }
     let (vertices, positions) = tutte(mesh, &triangles, &fixed, weights).map_err(|m| fail(format!("chart of face {name}: {m}")))?;
     let index: HashMap<u32, usize> = vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
-    let flipped = triangles
-        .iter()
-        .filter(|&&t| {
-            let q = mesh.triangles[t as usize].map(|v| plane_coords(face.dir, positions[index[&v]]));
-            (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]) <= 0.0
-        })
-        .count();
-    Ok(ChartMap { face: f, vertices, positions, triangles, flipped, convex: fcorners.len() == 4 })
+    let eps = 1e-12 * face.area.abs().max(1e-300);
+    let (mut flipped, mut degenerate) = (0, 0);
+    for &t in &triangles {
+        let q = mesh.triangles[t as usize].map(|v| plane_coords(face.dir, positions[index[&v]]));
+        let a = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+        if a < -eps {
+            flipped += 1;
+        } else if a <= eps {
+            degenerate += 1;
+        }
+    }
+    Ok(ChartMap { face: f, vertices, positions, triangles, flipped, degenerate, convex: fcorners.len() == 4 })
 }
 
 /// The boundary of a chart as one loop of vertices, in the triangles' orientation.
