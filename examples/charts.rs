@@ -42,14 +42,24 @@ fn main() {
         let empty = seg.charts.iter().filter(|s| s.triangles == 0).count();
         println!(
             "{name} ({labels}): {} triangles, {} faces, {} charts non-empty, {empty} empty, {not_connected} not connected, \
-             {wrong_euler} not of the face's topology, corners {}/{}, islands moved {}, sweeps {}, {secs:.2} s",
+             {wrong_euler} not of the face's topology, corners {}/{}, islands moved {}, ears moved {}, sweeps {}, {secs:.2} s",
             input.surface.triangles.len(),
             c.faces.faces.len(),
             seg.charts.len() - empty,
             seg.corners.iter().flatten().count(),
             seg.corners.len(),
             seg.islands_moved,
+            seg.ears_moved,
             seg.sweeps,
+        );
+        let maps: Vec<_> = c.maps.iter().flatten().collect();
+        println!(
+            "  chart maps: {} of {}, {} flipped and {} without area in all, {} of them with a flip",
+            maps.len(),
+            c.maps.len(),
+            maps.iter().map(|m| m.flipped).sum::<usize>(),
+            maps.iter().map(|m| m.degenerate).sum::<usize>(),
+            maps.iter().filter(|m| m.flipped > 0).count()
         );
         for d in &seg.diagnostics {
             println!("  diagnostic: {d}");

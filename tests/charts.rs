@@ -132,6 +132,14 @@ fn the_segmentation_reports_what_does_not_match() {
     assert!(!c.segmentation.is_valid());
     let msg = c.segmentation.check().unwrap_err().to_string();
     assert!(msg.contains("has no chart"), "{msg}");
+    // bad input: typed errors, no panic
+    let mut bad = polycube_surface(&cube, 1);
+    bad.triangles[0][0] = 1_000_000;
+    assert!(segment_and_map(&input(&cube, bad), &ChartOptions::default()).is_err());
+    let mut nan = polycube_surface(&cube, 1);
+    nan.vertices[0][1] = f64::NAN;
+    assert!(segment_and_map(&input(&cube, nan), &ChartOptions::default()).is_err());
+    assert!(segment_and_map(&input(&Context::default(), polycube_surface(&cube, 1)), &ChartOptions::default()).is_err());
     let mut o = ChartOptions::default();
     o.sharp_angle = 0.0;
     assert!(segment_and_map(&input(&cube, polycube_surface(&cube, 1)), &o).is_err());

@@ -4,8 +4,9 @@
 //!
 //! One step a file:
 //! 1. [`faces`]: the polycube's boundary faces, corners and edges;
-//! 2. [`segment`]: the seed labelling and its optimisation, and the removal of
-//!    islands so that every chart is connected;
+//! 2. [`segment`]: the seed labelling and its optimisation, the removal of ears
+//!    (triangles that would map without area) and of islands (so that every
+//!    chart is connected);
 //! 3. [`topology`]: the check of the charts against the faces (connected, disc or
 //!    annulus as the face is, adjacency, corners) with a diagnostic per mismatch;
 //! 4. [`chart_map`]: each chart onto its face (boundary by arc length between the
@@ -91,6 +92,8 @@ pub struct Segmentation {
     pub corners: Vec<Option<u32>>,
     /// Islands moved to a neighbouring chart to make the charts connected.
     pub islands_moved: usize,
+    /// Ears (triangles bordering one other chart across two edges) moved to that chart.
+    pub ears_moved: usize,
     /// Sweeps of the optimisation.
     pub sweeps: usize,
     /// What does not match the polycube (empty when the charts are as the faces are).
@@ -130,13 +133,16 @@ pub fn segment(surface: &TriMesh, pf: &PolycubeFaces, corr: &[([f64; 3], [f64; 3
     let g = segment::TriGraph::new(surface, opts.sharp_angle);
     let mut labels = segment::seed(&g, pf, corr);
     let sweeps = segment::optimise(&g, pf, opts, &mut labels);
+    let mut ears_moved = segment::remove_ears(&g, &mut labels, pf.faces.len());
     let islands_moved = segment::remove_islands(&g, &mut labels, pf.faces.len());
+    ears_moved += segment::remove_ears(&g, &mut labels, pf.faces.len());
     let topology = topology::check_topology(surface, &g, pf, &labels);
     Ok(Segmentation {
         face_of: labels,
         charts: topology.charts.clone(),
         corners: topology.corners.clone(),
         islands_moved,
+        ears_moved,
         sweeps,
         diagnostics: topology.diagnostics.clone(),
         topology,
@@ -156,6 +162,13 @@ pub struct Charts {
 /// The polycube faces of `input.context`, the segmentation of `input.surface` into
 /// their charts and each chart's map onto its face.
 pub fn segment_and_map(input: &HexInput, opts: &ChartOptions) -> Result<Charts> {
+    let validity = input.context.validity();
+    if !validity.valid {
+        return Err(Error::InvalidContext(format!(
+            "the polycube is not a valid solid: {}",
+            validity.reason.unwrap_or_default()
+        )));
+    }
     let faces = polycube_faces(&input.context)?;
     let segmentation = segment(&input.surface, &faces, &input.correspondence, opts)?;
     let maps = (0..faces.faces.len())

@@ -207,6 +207,40 @@ pub fn remove_islands(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
     moved
 }
 
+/// Move ears: a triangle that borders one other chart across two of its edges and
+/// its own chart across the third goes to that other chart (its three vertices
+/// would lie on one straight run of its face's boundary and map to a triangle
+/// without area). A chart's last triangle stays. Returns the number moved.
+pub fn remove_ears(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
+    let mut size = vec![0usize; faces];
+    for &l in labels.iter() {
+        size[l as usize] += 1;
+    }
+    let mut moved = 0;
+    for _sweep in 0..16 {
+        let mut changed = 0;
+        for t in 0..labels.len() {
+            let nb = &g.neighbours[t];
+            let own = labels[t];
+            if nb.len() != 3 || size[own as usize] <= 1 {
+                continue;
+            }
+            let others: Vec<u32> = nb.iter().map(|&(u, _, _)| labels[u as usize]).filter(|&l| l != own).collect();
+            if others.len() == 2 && others[0] == others[1] {
+                labels[t] = others[0];
+                size[own as usize] -= 1;
+                size[others[0] as usize] += 1;
+                changed += 1;
+            }
+        }
+        moved += changed;
+        if changed == 0 {
+            break;
+        }
+    }
+    moved
+}
+
 /// Input point -> polycube point by the nearest correspondence pair (bucket grid).
 struct PointLookup {
     pairs: Vec<([f64; 3], [f64; 3])>,
