@@ -1,10 +1,13 @@
-//! The map of one chart onto its polycube face: the chart's boundary loop onto the
+//! The map of one chart onto its polycube face: the chart's boundary loop(s) onto the
 //! face's boundary polygon (corner vertices onto the polycube corners, arc length
 //! between them), the interior by a Tutte embedding (mean-value or uniform weights,
 //! one sparse solve), then a count of the triangles that come out flipped or
 //! without area (an ear: three vertices on one straight boundary run). On a
 //! convex face (a rectangle) the embedding is bijective by Tutte's and Floater's
-//! theorems; on a non-convex face (an L) it may fold, which the count shows.
+//! theorems; on a non-convex face (an L) it may fold, which the count shows. A
+//! rectangle with one rectangular hole is cut into four convex quadrilaterals
+//! (outer corner to nearest inner corner), its chart along shortest interior paths
+//! between the matching corner vertices, which are fixed on the cut segments.
 
 use super::faces::{plane_coords, PolycubeFaces};
 use super::topology::ChartTopology;
@@ -37,9 +40,13 @@ fn fail(msg: String) -> Error {
     Error::MeshingFailed(msg)
 }
 
-/// Map the chart of face `f` (see the module docs). Errors name what stops the map:
-/// a face with a hole (annuli are not supported), a chart that is not one loop, a
-/// corner vertex that is missing or off the chart's boundary or out of order.
+/// Map the chart of face `f` (see the module docs). A face with one rectangular
+/// hole (the top of a through-hole cube) is cut into four convex quadrilaterals by
+/// the segments from its outer corners to the nearest inner corners, and its chart
+/// along shortest interior paths between the matching corner vertices. Errors name
+/// what stops the map: another face with holes, a chart with other boundary loops
+/// than its face, a corner vertex that is missing, off the chart's boundary or out
+/// of order, a cut path that cannot be found.
 pub fn map_chart(
     mesh: &TriMesh,
     pf: &PolycubeFaces,
@@ -50,9 +57,13 @@ pub fn map_chart(
 ) -> Result<ChartMap> {
     let face = &pf.faces[f];
     let name = pf.name(f);
-    if face.loops.len() != 1 {
+    let corner_at: HashMap<usize, usize> = pf.corners.iter().enumerate().map(|(c, k)| (k.vertex, c)).collect();
+    let fcorners: Vec<Vec<usize>> =
+        face.loops.iter().map(|l| l.iter().filter_map(|v| corner_at.get(v).copied()).collect()).collect();
+    let annulus = face.loops.len() == 2 && fcorners.iter().all(|c| c.len() == 4);
+    if face.loops.len() != 1 && !annulus {
         return Err(fail(format!(
-            "face {name} has a hole ({} boundary loops): chart maps of faces with holes are not supported",
+            "face {name} has {} boundary loops: chart maps are supported for discs and for rectangles with one rectangular hole",
             face.loops.len()
         )));
     }
@@ -60,45 +71,35 @@ pub fn map_chart(
     if triangles.is_empty() {
         return Err(fail(format!("face {name} has no chart")));
     }
-    let chart_loop = chart_boundary(mesh, &triangles).map_err(|m| fail(format!("chart of face {name}: {m}")))?;
-    // the face's corners in loop order with their positions
-    let floop = &face.loops[0];
-    let corner_at: HashMap<usize, usize> = pf.corners.iter().enumerate().map(|(c, k)| (k.vertex, c)).collect();
-    let fcorners: Vec<usize> = floop.iter().filter_map(|v| corner_at.get(v).copied()).collect();
-    let mut at_loop: Vec<usize> = Vec::with_capacity(fcorners.len());
-    let pos_in_loop: HashMap<u32, usize> = chart_loop.iter().enumerate().map(|(i, &v)| (v, i)).collect();
-    for &c in &fcorners {
-        let v = topo.corners[c].ok_or_else(|| fail(format!("chart of face {name}: corner {c} has no input vertex")))?;
-        let k = *pos_in_loop
-            .get(&v)
-            .ok_or_else(|| fail(format!("chart of face {name}: corner {c} (vertex {v}) is not on the chart's boundary")))?;
-        at_loop.push(k);
+    let ctx = |m: String| fail(format!("chart of face {name}: {m}"));
+    let loops = chart_boundary(mesh, &triangles).map_err(ctx)?;
+    if loops.len() != face.loops.len() {
+        return Err(ctx(format!("it has {} boundary loops, its face {}", loops.len(), face.loops.len())));
     }
-    // the corners must come in the face's cyclic order along the chart's loop
-    let n = chart_loop.len();
-    let rel: Vec<usize> = at_loop.iter().map(|&k| (k + n - at_loop[0]) % n).collect();
-    if rel.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(fail(format!("chart of face {name}: its corners are not in the face's order along its boundary")));
-    }
-    // boundary positions: arc length between consecutive corners
+    let vertex_of = |c: usize| topo.corners[c].ok_or_else(|| ctx(format!("corner {c} has no input vertex")));
     let mut fixed: HashMap<u32, [f64; 3]> = HashMap::new();
-    let m = fcorners.len();
-    for i in 0..m {
-        let (k0, k1) = (at_loop[i], at_loop[(i + 1) % m]);
-        let (a, b) = (pf.corners[fcorners[i]].position, pf.corners[fcorners[(i + 1) % m]].position);
-        let run: Vec<u32> = (0..=((k1 + n - k0) % n)).map(|j| chart_loop[(k0 + j) % n]).collect();
-        let lens: Vec<f64> = run.windows(2).map(|w| norm(sub(mesh.vertices[w[1] as usize], mesh.vertices[w[0] as usize]))).collect();
-        let total: f64 = lens.iter().sum();
-        let mut acc = 0.0;
-        for (j, &v) in run.iter().enumerate() {
-            let t = if total > 0.0 { acc / total } else { j as f64 / (run.len() - 1).max(1) as f64 };
-            fixed.insert(v, add(a, scale(sub(b, a), t)));
-            if j < lens.len() {
-                acc += lens[j];
-            }
+    for fc in &fcorners {
+        let v0 = vertex_of(fc[0])?;
+        let l = loops.iter().find(|l| l.contains(&v0)).ok_or_else(|| ctx(format!("corner {} (vertex {v0}) is not on the chart's boundary", fc[0])))?;
+        fix_loop(mesh, pf, l, fc, &topo.corners, &mut fixed).map_err(ctx)?;
+    }
+    if annulus {
+        let on_boundary: std::collections::HashSet<u32> = loops.iter().flatten().copied().collect();
+        let corner_vertices: Vec<u32> = fcorners.iter().flatten().filter_map(|&c| topo.corners[c]).collect();
+        let mut blocked = on_boundary.clone();
+        for &oc in &fcorners[0] {
+            let po = pf.corners[oc].position;
+            let ic = *fcorners[1].iter().min_by(|&&a, &&b| dist2(pf.corners[a].position, po).total_cmp(&dist2(pf.corners[b].position, po))).unwrap();
+            let (vo, vi) = (vertex_of(oc)?, vertex_of(ic)?);
+            let ends = |v: u32| near_corner(mesh, &loops, v, &corner_vertices);
+            let path = cut_path(mesh, &triangles, &ends(vo), &ends(vi), &blocked)
+                .ok_or_else(|| ctx(format!("no interior path from corner {oc} to corner {ic} to cut the annulus along")))?;
+            let (a, b) = (fixed[&path[0]], fixed[path.last().unwrap()]);
+            place_run(mesh, &path, a, b, &mut fixed);
+            blocked.extend(path.iter().copied());
         }
     }
-    let (vertices, positions) = tutte(mesh, &triangles, &fixed, weights).map_err(|m| fail(format!("chart of face {name}: {m}")))?;
+    let (vertices, positions) = tutte(mesh, &triangles, &fixed, weights).map_err(ctx)?;
     let index: HashMap<u32, usize> = vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
     let eps = 1e-12 * face.area.abs().max(1e-300);
     let (mut flipped, mut degenerate) = (0, 0);
@@ -111,11 +112,147 @@ pub fn map_chart(
             degenerate += 1;
         }
     }
-    Ok(ChartMap { face: f, vertices, positions, triangles, flipped, degenerate, convex: fcorners.len() == 4 })
+    let convex = annulus || fcorners[0].len() == 4;
+    Ok(ChartMap { face: f, vertices, positions, triangles, flipped, degenerate, convex })
 }
 
-/// The boundary of a chart as one loop of vertices, in the triangles' orientation.
-fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<u32>, String> {
+/// Fix the vertices of one chart boundary loop: the corner vertices of `fc` (corner
+/// ids in the face loop's order) onto their corners, the vertices between two
+/// corners by arc length on the straight edge between them.
+fn fix_loop(
+    mesh: &TriMesh,
+    pf: &PolycubeFaces,
+    chart_loop: &[u32],
+    fc: &[usize],
+    corners: &[Option<u32>],
+    fixed: &mut HashMap<u32, [f64; 3]>,
+) -> std::result::Result<(), String> {
+    let pos_in_loop: HashMap<u32, usize> = chart_loop.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let mut at_loop: Vec<usize> = Vec::with_capacity(fc.len());
+    for &c in fc {
+        let v = corners[c].ok_or_else(|| format!("corner {c} has no input vertex"))?;
+        let k = *pos_in_loop.get(&v).ok_or_else(|| format!("corner {c} (vertex {v}) is not on the chart's boundary"))?;
+        at_loop.push(k);
+    }
+    // the corners must come in the face's cyclic order along the chart's loop
+    let n = chart_loop.len();
+    let rel: Vec<usize> = at_loop.iter().map(|&k| (k + n - at_loop[0]) % n).collect();
+    if rel.windows(2).any(|w| w[1] <= w[0]) {
+        return Err("its corners are not in the face's order along its boundary".into());
+    }
+    let m = fc.len();
+    for i in 0..m {
+        let (k0, k1) = (at_loop[i], at_loop[(i + 1) % m]);
+        let (a, b) = (pf.corners[fc[i]].position, pf.corners[fc[(i + 1) % m]].position);
+        let steps = if m == 1 { n } else { (k1 + n - k0) % n };
+        let run: Vec<u32> = (0..=steps).map(|j| chart_loop[(k0 + j) % n]).collect();
+        place_run(mesh, &run, a, b, fixed);
+    }
+    Ok(())
+}
+
+/// Place the vertices of a run of input vertices on the segment a-b by arc length.
+fn place_run(mesh: &TriMesh, run: &[u32], a: [f64; 3], b: [f64; 3], fixed: &mut HashMap<u32, [f64; 3]>) {
+    let lens: Vec<f64> = run.windows(2).map(|w| norm(sub(mesh.vertices[w[1] as usize], mesh.vertices[w[0] as usize]))).collect();
+    let total: f64 = lens.iter().sum();
+    let mut acc = 0.0;
+    for (j, &v) in run.iter().enumerate() {
+        let t = if total > 0.0 { acc / total } else { j as f64 / (run.len() - 1).max(1) as f64 };
+        fixed.insert(v, add(a, scale(sub(b, a), t)));
+        if j < lens.len() {
+            acc += lens[j];
+        }
+    }
+}
+
+/// The boundary vertices a cut may end at near corner vertex `v`: `v` itself and up
+/// to three loop vertices either side (not past another corner), each with a cost
+/// of four times its distance along the loop, so the corner is preferred and a
+/// neighbour is taken where the corner has no interior neighbour.
+fn near_corner(mesh: &TriMesh, loops: &[Vec<u32>], v: u32, corners: &[u32]) -> Vec<(u32, f64)> {
+    let mut out = vec![(v, 0.0)];
+    let Some(l) = loops.iter().find(|l| l.contains(&v)) else { return out };
+    let n = l.len();
+    let k = l.iter().position(|&x| x == v).unwrap();
+    for step in [1, n - 1] {
+        let (mut acc, mut prev) = (0.0, v);
+        for j in 1..=3usize.min(n / 2) {
+            let u = l[(k + step * j) % n];
+            if corners.contains(&u) {
+                break;
+            }
+            acc += norm(sub(mesh.vertices[u as usize], mesh.vertices[prev as usize]));
+            out.push((u, 4.0 * acc));
+            prev = u;
+        }
+    }
+    out
+}
+
+/// Shortest edge path within the chart's triangles from one of `sources` to one of
+/// `targets` (each with a start or end cost) through vertices that are not `blocked`.
+fn cut_path(
+    mesh: &TriMesh,
+    triangles: &[u32],
+    sources: &[(u32, f64)],
+    targets: &[(u32, f64)],
+    blocked: &std::collections::HashSet<u32>,
+) -> Option<Vec<u32>> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let mut adj: HashMap<u32, Vec<u32>> = HashMap::new();
+    for &t in triangles {
+        let tri = mesh.triangles[t as usize];
+        for k in 0..3 {
+            adj.entry(tri[k]).or_default().push(tri[(k + 1) % 3]);
+            adj.entry(tri[(k + 1) % 3]).or_default().push(tri[k]);
+        }
+    }
+    let target: HashMap<u32, f64> = targets.iter().copied().collect();
+    let source: std::collections::HashSet<u32> = sources.iter().map(|s| s.0).collect();
+    let mut dist: HashMap<u32, f64> = HashMap::new();
+    let mut prev: HashMap<u32, u32> = HashMap::new();
+    let mut heap = BinaryHeap::new();
+    for &(s, c) in sources {
+        dist.insert(s, c);
+        heap.push((Reverse(c.to_bits()), s));
+    }
+    while let Some((Reverse(dk), v)) = heap.pop() {
+        let d = f64::from_bits(dk);
+        if d > dist[&v] {
+            continue;
+        }
+        if target.contains_key(&v) {
+            let mut path = vec![v];
+            while let Some(&p) = prev.get(path.last().unwrap()) {
+                path.push(p);
+            }
+            path.reverse();
+            return Some(path);
+        }
+        if !source.contains(&v) && blocked.contains(&v) {
+            continue;
+        }
+        for &u in adj.get(&v).into_iter().flatten() {
+            let end = target.get(&u).copied();
+            // the path runs through interior vertices; a boundary-to-boundary step
+            // is allowed only from a source straight to a target
+            if end.is_none() && blocked.contains(&u) {
+                continue;
+            }
+            let nd = d + norm(sub(mesh.vertices[u as usize], mesh.vertices[v as usize])) + end.unwrap_or(0.0);
+            if dist.get(&u).is_none_or(|&old| nd < old) {
+                dist.insert(u, nd);
+                prev.insert(u, v);
+                heap.push((Reverse(nd.to_bits()), u));
+            }
+        }
+    }
+    None
+}
+
+/// The boundary loops of a chart, in the triangles' orientation.
+fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<Vec<u32>>, String> {
     let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
     for &t in triangles {
         let tri = mesh.triangles[t as usize];
@@ -129,22 +266,30 @@ fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<
             return Err(format!("its boundary passes vertex {a} twice (the chart is pinched there)"));
         }
     }
-    let Some(&start) = next.keys().min() else {
+    if next.is_empty() {
         return Err("it has no boundary (a closed surface)".into());
-    };
-    let mut l = vec![start];
-    let mut cur = next[&start];
-    while cur != start {
-        l.push(cur);
-        cur = *next.get(&cur).ok_or_else(|| format!("its boundary is open at vertex {cur}"))?;
-        if l.len() > next.len() {
-            return Err("its boundary does not close".into());
+    }
+    let mut starts: Vec<u32> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let mut seen: std::collections::HashSet<u32> = std::collections::HashSet::new();
+    let mut loops = Vec::new();
+    for s in starts {
+        if seen.contains(&s) {
+            continue;
         }
+        let mut l = vec![s];
+        seen.insert(s);
+        let mut cur = next[&s];
+        while cur != s {
+            if !seen.insert(cur) {
+                return Err("its boundary does not close".into());
+            }
+            l.push(cur);
+            cur = *next.get(&cur).ok_or_else(|| format!("its boundary is open at vertex {cur}"))?;
+        }
+        loops.push(l);
     }
-    if l.len() != next.len() {
-        return Err(format!("it has {} boundary edges off its main loop (not a disc)", next.len() - l.len()));
-    }
-    Ok(l)
+    Ok(loops)
 }
 
 /// Tutte embedding: every free vertex at the weighted mean of its neighbours, the
