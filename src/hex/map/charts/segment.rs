@@ -164,7 +164,7 @@ pub fn components(g: &TriGraph, labels: &[u32], f: u32) -> Vec<Vec<u32>> {
 /// the longest boundary with. Returns the number of islands moved.
 pub fn remove_islands(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
     let mut moved = 0;
-    for _round in 0..64 {
+    for _ in 0..1000 {
         let mut islands: Vec<(f64, Vec<u32>)> = Vec::new();
         for f in 0..faces as u32 {
             let comps = components(g, labels, f);
@@ -202,7 +202,6 @@ pub fn remove_islands(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
             labels[t as usize] = to;
         }
         moved += 1;
-        let _ = _round;
     }
     moved
 }
@@ -217,7 +216,7 @@ pub fn remove_ears(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
         size[l as usize] += 1;
     }
     let mut moved = 0;
-    for _sweep in 0..16 {
+    for _ in 0..16 {
         let mut changed = 0;
         for t in 0..labels.len() {
             let nb = &g.neighbours[t];
