@@ -26,6 +26,7 @@
 //! Feature matching is in [`features`], the start embedding in [`warp`], the
 //! correspondence seed in [`correspondence`].
 
+pub mod charts;
 mod correspondence;
 mod features;
 mod levels;
