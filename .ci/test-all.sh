@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # The project's one test command (README "Tests"): installs the Debian packages
 # the tests need (skipped when already installed), runs every cargo test, builds
-# the CMake project in build/ and runs ctest (including the Valgrind memcheck set),
-# then builds the C++ tests again with ASan + UBSan in build-asan/ and runs them. Exits nonzero if anything fails.
+# the library and command as README does and checks where they are, builds the
+# CMake project in build/ and runs ctest (including the Valgrind memcheck set),
+# installs the Python package with pip from a fresh clone into a new virtual
+# environment and meshes a part with it (.ci/pip-install-test.sh), then builds the
+# C++ tests again with ASan + UBSan in build-asan/ and runs them. Exits nonzero if anything fails.
 # Idempotent: run it as often as you like.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest python3-distributed chromium pkg-config valgrind)
+packages=(cmake g++ libgtest-dev libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtet1.5-dev tetgen libvtk9-dev python3 python3-numpy python3-pytest python3-distributed python3-venv git chromium pkg-config valgrind)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -29,12 +32,24 @@ export SDDPM_REQUIRE_CHROMIUM=1
 # library (cargo feature test-hooks), so that it reuses this build
 cargo test --release --features test-hooks
 
+echo "== cargo build --release (README: the library and the command where it says)"
+cargo build --release
+target=${CARGO_TARGET_DIR:-target}
+for f in "$target/release/libsddpm.so" "$target/release/libsddpm.a" "$target/release/sddpm"; do
+  [ -f "$f" ] || { echo "missing after cargo build --release: $f"; exit 1; }
+done
+"$target/release/sddpm" --version
+
 echo "== cmake configure + build (build/)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$jobs"
 
 echo "== ctest"
 ctest --test-dir build --output-on-failure -j"$jobs"
+
+echo "== pip install of the Python package from a fresh clone (.ci/pip-install-test.sh)"
+# reuses the cargo build --release above: the pip build compiles nothing
+bash .ci/pip-install-test.sh
 
 echo "== cpp_tests under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDDPM_SANITIZE=ON
