@@ -182,3 +182,11 @@ def test_library_is_found():
         assert p == str(bundled[0])  # an installed package uses its own library first
     elif os.environ.get("SDDPM_LIBRARY"):
         assert p == os.environ["SDDPM_LIBRARY"]
+
+
+def test_work_unit_returns_every_refusal(tmp_path):
+    """sddpm.work.mesh_file reports errors in its summary, whatever their Python type."""
+    s = sddpm.work.mesh_file(str(tmp_path / "missing.obj"), str(tmp_path / "a"))
+    assert s["status"] == "IO" and "missing.obj" in s["error"]
+    s = sddpm.work.mesh_file(str(HOLE), str(tmp_path / "b"), contexts="cube,0,0")
+    assert s["status"] == "INVALID_CONTEXT"
