@@ -190,3 +190,20 @@ def test_work_unit_returns_every_refusal(tmp_path):
     assert s["status"] == "IO" and "missing.obj" in s["error"]
     s = sddpm.work.mesh_file(str(HOLE), str(tmp_path / "b"), contexts="cube,0,0")
     assert s["status"] == "INVALID_CONTEXT"
+
+
+def test_c_run_contract():
+    """sddpm_run's C contract: NULL arguments are refused naming them, as the parser's errors."""
+    import ctypes as C
+
+    lib = sddpm.load_library()
+    cb = C.CFUNCTYPE(C.c_int, C.c_double, C.c_char_p, C.c_void_p)()
+    assert lib.sddpm_run(None, 1, cb, None) == 1
+    assert "`args` is NULL" in sddpm._capi._last_message()
+    argv = (C.c_char_p * 2)(b"--output=/nonexistent-dir/out", None)
+    assert lib.sddpm_run(argv, 2, cb, None) == 1
+    assert "`args[1]` is NULL" in sddpm._capi._last_message()
+    assert lib.sddpm_run(None, 0, cb, None) == 1  # no mesh, no output: the parser's refusal
+    assert "required" in sddpm._capi._last_message()
+    need = C.c_size_t()
+    assert lib.sddpm_run_arguments_json(None, 0, C.byref(need)) == 12 and need.value > 100
