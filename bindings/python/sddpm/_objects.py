@@ -299,7 +299,7 @@ class Contexts(_Handle):
 
     def _summary(self) -> str:
         n = len(self)
-        return f"{n} context{'s' if n != 1 else ''}, first labels {list(self.labels(0)) if n else []}"
+        return f"{n} context{'s' if n != 1 else ''}, first labels {self.labels(0).tolist() if n else []}"
 
 
 # ---------------------------------------------------------------- Model and Polycube
@@ -417,7 +417,7 @@ class Polycube(_Handle):
     def _summary(self) -> str:
         n = _SZ()
         _check(load_library().sddpm_polycube_candidate_count(self.handle, C.byref(n)))
-        return f"{'accepted' if self.accepted else 'not accepted'}, labels {list(self.labels)}, {n.value} candidates"
+        return f"{'accepted' if self.accepted else 'not accepted'}, labels {self.labels.tolist()}, {n.value} candidates"
 
 
 # ---------------------------------------------------------------- HexMesh and Spline
