@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # The project's one test command (README "Tests"): installs the Debian packages
 # the tests need (skipped when already installed), runs every cargo test, builds
-# the library and command as README does and checks where they are, builds the
-# CMake project in build/ and runs ctest (including the Valgrind memcheck set),
+# the CMake project in build/ and runs ctest (including the Valgrind memcheck set),
+# builds the C++ tests again with ASan + UBSan in build-asan/ and runs them, then
+# builds the library and command as README does and checks where they are, and
 # installs the Python package with pip from a fresh clone into a new virtual
-# environment and meshes a part with it (.ci/pip-install-test.sh), then builds the
-# C++ tests again with ASan + UBSan in build-asan/ and runs them. Exits nonzero if anything fails.
+# environment and meshes a part with it (.ci/pip-install-test.sh). Exits nonzero if anything fails.
 # Idempotent: run it as often as you like.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,6 +32,23 @@ export SDDPM_REQUIRE_CHROMIUM=1
 # library (cargo feature test-hooks), so that it reuses this build
 cargo test --release --features test-hooks
 
+echo "== cmake configure + build (build/)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j"$jobs"
+
+echo "== ctest"
+ctest --test-dir build --output-on-failure -j"$jobs"
+
+echo "== cpp_tests under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)"
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDDPM_SANITIZE=ON
+cmake --build build-asan -j"$jobs"
+ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1 \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure -j"$jobs"
+
+# Last: the library without test-hooks, as README builds it. Cargo keeps one build
+# of the crate's own library at a time (its file names carry no hash), so this
+# rebuilds the crate once; the pip build below then reuses it and compiles nothing.
 echo "== cargo build --release (README: the library and the command where it says)"
 cargo build --release
 target=${CARGO_TARGET_DIR:-target}
@@ -40,20 +57,6 @@ for f in "$target/release/libsddpm.so" "$target/release/libsddpm.a" "$target/rel
 done
 "$target/release/sddpm" --version
 
-echo "== cmake configure + build (build/)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j"$jobs"
-
-echo "== ctest"
-ctest --test-dir build --output-on-failure -j"$jobs"
-
 echo "== pip install of the Python package from a fresh clone (.ci/pip-install-test.sh)"
-# reuses the cargo build --release above: the pip build compiles nothing
 bash .ci/pip-install-test.sh
 
-echo "== cpp_tests under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)"
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSDDPM_SANITIZE=ON
-cmake --build build-asan -j"$jobs"
-ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1 \
-UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-asan --output-on-failure -j"$jobs"
