@@ -4,7 +4,8 @@
 
 Without an address a LocalCluster (one worker process per core) is started; with
 one (e.g. tcp://head:8786) the work goes to that cluster's workers, which need the
-package and libsddpm.so (SDDPM_LIBRARY) themselves.
+package themselves (`pip install ./bindings/python`, or a wheel of it: the library
+is inside).
 """
 import pathlib
 import sys

@@ -1,9 +1,9 @@
 """FreeCAD macro: mesh the selected shape's tessellation with libsddpm.
 
 Select one solid in FreeCAD and run this macro (Macro > Macros... > Execute), with
-the `sddpm` Python package on FreeCAD's sys.path (e.g. copy bindings/python/sddpm
-next to the macro, or `pip install bindings/python` into FreeCAD's Python) and
-libsddpm.so findable (SDDPM_LIBRARY, or next to the package). It writes the hex mesh
+the `sddpm` Python package on FreeCAD's sys.path (`pip install ./bindings/python`
+into FreeCAD's Python: the library comes inside it; or copy bindings/python/sddpm
+next to the macro and set SDDPM_LIBRARY to libsddpm.so). It writes the hex mesh
 (VTU, LS-DYNA), the spline (BEXT + LS-DYNA deck) and a JSON report into a folder
 next to the document (or the temp folder) and prints a summary in the report view.
 

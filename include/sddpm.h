@@ -740,6 +740,36 @@ sddpm_status sddpm_options_describe_json(const struct sddpm_options *o,
                                          size_t len,
                                          size_t *needed);
 
+// Run the main job of `sddpm run` into its output folder. `args`: `n_args`
+// NUL-terminated UTF-8 strings, the arguments that follow `sddpm run` on the
+// command line (the mesh path, `-o DIR` or `--output=DIR`, and any option of
+// `sddpm run --help`; "--" before a mesh path that starts with a dash). They go
+// through the command's own parser and checks, and the folder gets every file
+// the command writes (report.json and report.html included; the report's
+// "command" is `sddpm run` with these arguments). Nothing is printed (`--quiet`
+// and `--json` change nothing here); progress over 0-1 through `progress`.
+// INVALID_ARGUMENT with the parser's message for arguments the command refuses;
+// otherwise the statuses of the stages (IO, INVALID_MESH, GENUS_MISMATCH, ...).
+//
+// # Safety
+// `args` NULL (only with `n_args` 0) or `n_args` readable pointers to NUL-terminated
+// strings; `progress` NULL or a valid callback.
+sddpm_status sddpm_run(const char *const *args,
+                       size_t n_args,
+                       sddpm_progress_cb progress,
+                       void *user_data);
+
+// Every argument of `sddpm run` as a JSON array, NUL-terminated, copied into `buf`
+// (`len` bytes; `needed`, may be NULL, receives the size with the NUL): objects
+// with "name" (the long name, e.g. "no-spline"; "mesh" for the input), "kind"
+// ("positional", "flag", "value", "list": repeatable), "type" ("bool", "int",
+// "number", "string", "path"), "required", "default" (null when none) and "help".
+// BUFFER_TOO_SMALL (buffer untouched) when it does not fit.
+//
+// # Safety
+// `buf` NULL or `len` writable bytes; `needed` NULL or writable.
+sddpm_status sddpm_run_arguments_json(char *buf, size_t len, size_t *needed);
+
 // Build the spline of a hex mesh. The boundary is fitted to `surface` when given,
 // else to the surface the hex mesh was built for (none for a mesh from arrays).
 // `options` (NULL: the defaults) gives the "spline.*" options.

@@ -3,10 +3,17 @@
 //! extraction out. See docs/ and ../shared/DESIGN.md for the conventions.
 //!
 //! The modules are stages that stack one way, lowest first: error, geometry, mesh,
-//! polycube, context, diffusion, search, hex, spline, export, pipeline, and on top
-//! the command line and the C ABI (ffi). A stage uses only the stages below it
+//! polycube, context, diffusion, search, hex, spline, export, pipeline, the command
+//! line (cli) and on top the C ABI (ffi), whose sddpm_run runs `sddpm run` with the
+//! command line's parser. A stage uses only the stages below it
 //! (tests/layers.rs checks every `crate::` path).
 
+// The command line (src/cli) names this crate `sddpm`, as the `sddpm` binary does;
+// it is compiled into the library so that the C ABI's sddpm_run parses the same
+// arguments as `sddpm run`.
+extern crate self as sddpm;
+
+pub mod cli;
 pub mod context;
 pub mod diffusion;
 pub mod error;

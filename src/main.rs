@@ -1,7 +1,5 @@
 //! The `sddpm` command line (see DESIGN.md "Command line" and `sddpm --help`).
 
-mod cli;
-
 fn main() {
-    std::process::exit(cli::run());
+    std::process::exit(sddpm::cli::run());
 }

@@ -1,7 +1,7 @@
 //! The stages of the library stack one way. Lowest first:
 //!
 //! error < geometry < mesh < polycube < context < diffusion < search < hex < spline
-//! < export < pipeline < cli, ffi
+//! < export < pipeline < cli < ffi
 //!
 //! A file's stage is the first path component under src/ (the file stem for a file
 //! directly in src/); lib.rs and main.rs, which only declare the stages, are exempt.
@@ -27,7 +27,9 @@ const ORDER: &[&[&str]] = &[
     &["spline"],
     &["export"],
     &["pipeline"],
-    &["cli", "ffi"],
+    // the C ABI's sddpm_run runs `sddpm run` with the command line's own parser
+    &["cli"],
+    &["ffi"],
 ];
 
 /// Usable by every stage.

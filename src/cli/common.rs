@@ -60,16 +60,16 @@ pub fn to_user_polycube(result: &PolycubeResult, c: &Candidate) -> TriMesh {
 /// The command line as typed (arguments with spaces or quotes single-quoted), for
 /// report.json's "command".
 pub fn command_line() -> String {
-    std::env::args()
-        .map(|a| {
-            if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@%".contains(c)) {
-                a
-            } else {
-                format!("'{}'", a.replace('\'', "'\\''"))
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
+    std::env::args().map(|a| shell_quote(&a)).collect::<Vec<_>>().join(" ")
+}
+
+/// `a` as a shell word: as it is when it has no special character, else single-quoted.
+pub fn shell_quote(a: &str) -> String {
+    if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:,+@%".contains(c)) {
+        a.to_string()
+    } else {
+        format!("'{}'", a.replace('\'', "'\\''"))
+    }
 }
 
 /// Make `dir` ready for a command's files: a folder that does not exist or is

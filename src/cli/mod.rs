@@ -1,5 +1,7 @@
 //! Command-line definitions. Each command lives in its own file and returns
 //! an exit code: 0 on success, 2 on bad input (with `error: <what>` on stderr).
+//! The `sddpm` binary calls [`run`]; [`run_with_args`] runs `sddpm run` inside a
+//! process with the same parser (the C ABI's sddpm_run).
 
 use clap::{Parser, Subcommand};
 
@@ -9,11 +11,14 @@ mod context;
 mod dataset;
 mod evalmodel;
 mod info;
+mod library;
 mod plotloss;
 mod polycube;
 mod run;
 mod train;
 mod weights;
+
+pub use library::{run_arguments, run_with_args};
 
 /// Exit code for bad input (DESIGN.md).
 pub const EXIT_BAD_INPUT: i32 = 2;

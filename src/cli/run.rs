@@ -2,10 +2,10 @@
 
 use super::common::{load_checked, Loaded};
 use super::polycube::{load_generator, options_of, request_of, PolycubeArgs};
-use sddpm::error::Error;
+use sddpm::error::{Error, Progress};
 use sddpm::hex::{HexOption, HexOptions};
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
-use sddpm::pipeline::{run as run_job, RunOptions};
+use sddpm::pipeline::{run as run_job, RunOptions, RunResult};
 use sddpm::Result;
 
 #[derive(clap::Args, Debug)]
@@ -162,7 +162,18 @@ fn flag(o: HexOption) -> &'static str {
     }
 }
 
-pub fn run(a: &RunArgs) -> Result<i32> {
+/// What the main job wrote: report.json's content and the run's result.
+pub struct RunDone {
+    pub report: serde_json::Value,
+    pub result: RunResult,
+    pub seconds: f64,
+}
+
+/// The main job of `sddpm run` into its output folder: every check, the pipeline
+/// and every file the command writes, with progress through `progress` and
+/// `command` as report.json's "command". Prints nothing (the command and the C
+/// ABI's sddpm_run both call it).
+pub fn run_folder(a: &RunArgs, progress: &mut dyn Progress, command: &str) -> Result<RunDone> {
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
     let mut opts = RunOptions::default();
@@ -183,22 +194,36 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     if let Some(n) = a.hex_candidates {
         opts.hex_candidates = n;
     }
-    let mut progress = super::common::progress_bar(p.quiet);
-    let r = run_job(&model, &mesh, genus, &request, &opts, &mut progress)?;
-    let command = super::common::command_line();
-    let j = write_run_folder(&p.output, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(&command) }, &r, t0.elapsed().as_secs_f64())?;
+    let r = run_job(&model, &mesh, genus, &request, &opts, progress)?;
+    let input = InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(command) };
+    let j = write_run_folder(&p.output, &input, &r, t0.elapsed().as_secs_f64())?;
+    Ok(RunDone { report: j, result: r, seconds: t0.elapsed().as_secs_f64() })
+}
+
+/// The warnings of a finished run (also in report.json: `polycube.verification_error`
+/// and the hex attempts).
+pub fn warnings(r: &RunResult) -> Vec<String> {
+    let mut w = Vec::new();
     if let Some(e) = &r.verification_error {
-        if !p.quiet || p.json {
-            if r.hex.from_polycube() {
-                eprintln!("warning: no candidate passed verification; meshed the best-fitting unverified candidate ({e})");
-            } else {
-                eprintln!("warning: the mesh comes from the grid-based fallback, not from a polycube: {e}");
-            }
+        if r.hex.from_polycube() {
+            w.push(format!("no candidate passed verification; meshed the best-fitting unverified candidate ({e})"));
+        } else {
+            w.push(format!("the mesh comes from the grid-based fallback, not from a polycube: {e}"));
         }
     }
     if let Some(e) = r.hex_attempts.iter().filter(|t| t.candidate.is_none()).find_map(|t| t.error.as_ref()) {
-        if !p.quiet || p.json {
-            eprintln!("warning: the grid-based fallback was tried and failed ({e}); the hex mesh is the best polycube mesh, which misses the quality goals");
+        w.push(format!("the grid-based fallback was tried and failed ({e}); the hex mesh is the best polycube mesh, which misses the quality goals"));
+    }
+    w
+}
+
+pub fn run(a: &RunArgs) -> Result<i32> {
+    let p = &a.polycube;
+    let mut progress = super::common::progress_bar(p.quiet);
+    let RunDone { report: j, result: r, seconds } = run_folder(a, &mut progress, &super::common::command_line())?;
+    if !p.quiet || p.json {
+        for w in warnings(&r) {
+            eprintln!("warning: {w}");
         }
     }
     if p.json {
@@ -218,7 +243,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
             100.0 * r.hex.hausdorff_relative,
             if j["spline"].is_null() { String::new() } else { format!("spline: {} basis functions; ", j["spline"]["basis_functions"]) },
             p.output.display(),
-            t0.elapsed().as_secs_f64()
+            seconds
         );
     }
     Ok(0)

@@ -18,12 +18,14 @@ mod hex;
 mod mesh;
 mod model;
 mod options;
+mod run;
 mod spline;
 pub use context::*;
 pub use hex::*;
 pub use mesh::*;
 pub use model::*;
 pub use options::*;
+pub use run::*;
 pub use spline::*;
 
 /// Version of the C ABI: bumped whenever a declaration in include/sddpm.h changes incompatibly.

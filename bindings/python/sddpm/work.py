@@ -36,7 +36,7 @@ def mesh_file(path: str, out_dir: str, contexts: Optional[str] = None, level: Op
               steps: Optional[int] = None, spline: bool = True) -> dict:
     """Mesh one file: polycube (user contexts or automated), hex mesh, spline; write
     hex.vtu, hex.k, spline.bext, model.k and summary.json into out_dir. Returns the summary."""
-    from . import Contexts, HexMesh, Mesh, Polycube, SddpmError, Spline
+    from . import Contexts, HexMesh, Mesh, Polycube, SddpmError, SddpmValueError, Spline
 
     t0 = time.time()
     summary = {"file": str(path), "folder": str(out_dir), "status": "OK"}
@@ -57,8 +57,10 @@ def mesh_file(path: str, out_dir: str, contexts: Optional[str] = None, level: Op
             sp = Spline.build(hexm)
             sp.write(out_dir)
             summary["basis_functions"] = sp.counts()[1]
-    except SddpmError as e:
+    except (SddpmError, SddpmValueError) as e:
         summary.update({"status": e.name, "error": e.message})
+    except FileNotFoundError as e:
+        summary.update({"status": "IO", "error": f"{e.filename}: {e.strerror}"})
     summary["seconds"] = time.time() - t0
     summary["worker_pid"] = os.getpid()
     try:

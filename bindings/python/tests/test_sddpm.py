@@ -35,23 +35,28 @@ def test_options_by_name():
     assert (o.get("hex.goals.hausdorff"), o.get("hex_candidates")) == (0.02, 2)
     o.set("hex_map_level", None)  # back to the automatic level
     assert o.get("hex.map.level") is None
-    # refusals name the option and leave the value as it was
-    with pytest.raises(sddpm.SddpmError) as e:
+    # refusals name the option and leave the value as it was: an unknown name or a
+    # value out of range is a ValueError, a value of another type a TypeError, an
+    # unknown keyword a TypeError (as for any Python call)
+    with pytest.raises(sddpm.SddpmValueError) as e:
         o.set("hex.quality.pilow", True)
     assert e.value.name == "INVALID_ARGUMENT" and 'unknown option "hex.quality.pilow"' in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    assert isinstance(e.value, ValueError) and not isinstance(e.value, RuntimeError)
+    with pytest.raises(TypeError, match="hex_quality_pilow.*did you mean 'hex_quality_pillow'"):
         sddpm.Options(hex_quality_pilow=True)
-    assert 'unknown option "hex_quality_pilow"' in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(ValueError) as e:
         o.set("hex.goals.hausdorff", -1)
     assert e.value.name == "INVALID_ARGUMENT" and "option hex.goals.hausdorff must be" in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(ValueError) as e:
         o.set("hex.fallback.resolution", 2.5)
     assert "option hex.fallback.resolution must be a whole number" in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(TypeError, match="option hex.quality.pillow takes a bool, not int"):
         o.set("hex.quality.pillow", 1)
-    assert "option hex.quality.pillow is a bool option" in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(TypeError, match="option hex.goals.hausdorff takes a number"):
+        o.set("hex.goals.hausdorff", "0.5")
+    with pytest.raises(TypeError):
+        sddpm.Options(["hex.quality.pillow"])
+    with pytest.raises(ValueError) as e:
         o.set("polycube.orientations", "sideways")
     assert "option polycube.orientations" in e.value.message
     assert o.get("hex.goals.hausdorff") == 0.02
@@ -76,19 +81,30 @@ def test_mesh_load_check_and_arrays():
 
 
 def test_errors_carry_status_and_message():
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(FileNotFoundError) as e:
         sddpm.Mesh.load("/nonexistent/part.obj")
-    assert e.value.name == "IO" and e.value.status == 2 and "/nonexistent/part.obj" in e.value.message
+    assert e.value.filename == "/nonexistent/part.obj"
+    with pytest.raises(TypeError):
+        sddpm.Mesh.load(42)
     bad = sddpm.Mesh.load(DATA / "bad" / "cgal_mech-holes-shark.off")
     with pytest.raises(sddpm.SddpmError) as e:
         bad.validate()
-    assert e.value.name == "INVALID_MESH" and "boundary edges" in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    assert e.value.name == "INVALID_MESH" and e.value.status == 4 and "boundary edges" in e.value.message
+    assert isinstance(e.value, RuntimeError)
+    with pytest.raises(sddpm.SddpmValueError) as e:
         sddpm.Mesh.from_arrays(np.zeros((3, 3)), np.array([[0, 1, 7]]))
     assert e.value.name == "INVALID_ARGUMENT" and "vertex 7" in e.value.message
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(ValueError, match="vertices must be"):
+        sddpm.Mesh.from_arrays(np.zeros((3, 2)), np.array([[0, 1, 2]]))
+    with pytest.raises(ValueError) as e:
         sddpm.Contexts.parse("cube,0,0")
     assert e.value.name == "INVALID_CONTEXT"
+    with pytest.raises(TypeError):
+        sddpm.Contexts.parse(["cube"])
+    with pytest.raises(FileNotFoundError):
+        sddpm.Model.from_file("/nonexistent/weights.sddpmw")
+    with pytest.raises(TypeError, match="model must be a sddpm.Model"):
+        sddpm.Polycube.generate("model", bad)
 
 
 def test_contexts():
@@ -150,7 +166,7 @@ def test_whole_pipeline(tmp_path):
     model = sddpm.Model.embedded()
     mesh = sddpm.Mesh.load(DATA / "cgal_hole.off")
     pc = sddpm.Polycube.generate(model, mesh, sddpm.Contexts.parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0"), steps=10)
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(sddpm.SddpmValueError) as e:
         sddpm.HexMesh.build(pc, level=1, hex_fallback_resolution=1)
     assert e.value.name == "INVALID_ARGUMENT" and "hex.fallback.resolution" in e.value.message
     hexm = sddpm.HexMesh.build(pc, level=1, options={"hex.quality.pillow": True})
@@ -173,7 +189,7 @@ def test_whole_pipeline(tmp_path):
     sp.write(tmp_path)
     for f in ["hex.vtu", "hex.k", "spline.bext", "model.k"]:
         assert (tmp_path / f).is_file(), f
-    with pytest.raises(sddpm.SddpmError) as e:
+    with pytest.raises(sddpm.SddpmValueError) as e:
         sp.evaluate(0, 2.0, 0.5, 0.5)
     assert e.value.name == "INVALID_ARGUMENT"
     cube = sddpm.HexMesh.from_arrays([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], [list(range(8))])
