@@ -225,30 +225,7 @@ pub fn reverse_diffusion(
     opts: &SamplerOptions,
     progress: &mut dyn Progress,
 ) -> Result<SampleOutput> {
-    if opts.start_noise.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-        return Err(Error::InvalidArgument(format!("the sampler's start noise must be positive, got {:?}", opts.start_noise)));
-    }
-    if !opts.guidance.is_finite() || !opts.eps_scale.is_finite() || opts.kernel_gate.is_some_and(|g| !g.is_finite()) {
-        return Err(Error::InvalidArgument(format!(
-            "sampler weights must be finite (guidance {}, eps_scale {}, kernel_gate {:?})",
-            opts.guidance, opts.eps_scale, opts.kernel_gate
-        )));
-    }
-    if inputs.len() != contexts.len() {
-        return Err(Error::InvalidArgument(format!(
-            "{} input tensors for {} contexts",
-            inputs.len(),
-            contexts.len()
-        )));
-    }
-    for (i, x) in inputs.iter().enumerate() {
-        if x.len() != TENSOR_LEN {
-            return Err(Error::InvalidArgument(format!("input tensor {i} has {} values, expected {TENSOR_LEN}", x.len())));
-        }
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(Error::InvalidArgument(format!("input tensor {i} holds a non-finite value")));
-        }
-    }
+    check_sampler_inputs(inputs, contexts, opts)?;
     let n = inputs.len();
     let configured = model.net.configured(opts.kernel_gate.map(|g| g as f32), opts.visible_prior, opts.use_rank);
     let net = &configured;
@@ -258,14 +235,7 @@ pub fn reverse_diffusion(
     let starts: Vec<usize> = contexts.iter().map(|c| start_step_for(sched, opts, c)).collect();
     let batch = opts.max_batch.max(1);
     // candidates sharing a start step run together, in batches, in index order
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut distinct: Vec<usize> = starts.clone();
-    distinct.sort_unstable();
-    distinct.dedup();
-    for &t0 in distinct.iter().rev() {
-        let members: Vec<usize> = (0..n).filter(|&i| starts[i] == t0).collect();
-        groups.extend(members.chunks(batch).map(|c| c.to_vec()));
-    }
+    let groups = groups_by_start(&starts, batch);
     let total_calls: usize = groups.iter().map(|g| timesteps(starts[g[0]], opts.steps).len()).sum::<usize>().max(1);
     let mut calls = 0usize;
     for members in &groups {
@@ -303,25 +273,7 @@ pub fn reverse_diffusion(
         let mut z = vec![0f32; TENSOR_LEN];
         for (si, &t) in ts.iter().enumerate() {
             check_progress(progress, calls as f64 / total_calls as f64, "reverse diffusion")?;
-            let (xin, bb, ct) = match &ctx_g {
-                Some(g) => ([x.clone(), x.clone()].concat(), 2 * b, g.clone()),
-                None => (x.clone(), b, ctx_t.clone()),
-            };
-            let xt = Tensor::<4>::from_data(TensorData::new(xin, [bb, 3, TENSOR_H, TENSOR_W]), &model.device);
-            let eps = net.forward(xt, &vec![t; bb], ct, sched);
-            let mut eps: Vec<f32> = eps
-                .into_data()
-                .try_into_vec::<f32>()
-                .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
-            if ctx_g.is_some() {
-                let w = opts.guidance as f32;
-                let (c, u) = eps.split_at(b * TENSOR_LEN);
-                eps = c.iter().zip(u).map(|(c, u)| c + w * (c - u)).collect();
-            }
-            if opts.eps_scale != 1.0 {
-                let f = opts.eps_scale as f32;
-                eps.iter_mut().for_each(|v| *v *= f);
-            }
+            let eps = network_eps(model, net, &x, t, b, &ctx_t, ctx_g.as_ref(), opts)?;
             let s = ts.get(si + 1).copied().unwrap_or(0);
             for i in 0..b {
                 let r = i * TENSOR_LEN..(i + 1) * TENSOR_LEN;
@@ -342,26 +294,8 @@ pub fn reverse_diffusion(
                     sched.ddim_step(&x[r.clone()], &eps[r.clone()], t, s, &mut next[r.clone()]);
                 }
             }
-            // Known null blocks: a forward sample of x_0 = 0 at the new timestep s.
-            for i in 0..b {
-                let ctx = &contexts[members[i]];
-                let base = i * TENSOR_LEN;
-                let (sd, shift) = ((1.0 - sched.alpha_bar[s]).sqrt(), sched.qcoef[s]);
-                for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
-                    for p in 0..POINTS_PER_CELL {
-                        let (r, col) = slot(n, p);
-                        for ch in 0..3 {
-                            let v = if s == 0 {
-                                0.0
-                            } else {
-                                let zv: f64 = StandardNormal.sample(&mut rngs[i]);
-                                sd * zv + shift * sched.config.q[ch]
-                            };
-                            next[base + flat(ch, r, col)] = v as f32;
-                        }
-                    }
-                }
-            }
+            // known null blocks: a forward sample of x_0 = 0 at the new timestep s
+            null_blocks_at(sched, s, contexts, members, &mut rngs, &mut next);
             std::mem::swap(&mut x, &mut next);
             calls += 1;
             if opts.keep_every > 0 && ((si + 1) % opts.keep_every == 0 || s == 0) {
@@ -371,35 +305,7 @@ pub fn reverse_diffusion(
             }
         }
         if opts.refine_passes > 0 {
-            let t = opts.refine_t.clamp(1, sched.steps());
-            let (sa, sd, shift) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt(), sched.qcoef[t]);
-            for _ in 0..opts.refine_passes {
-                let mut xt = x.clone();
-                for (k, v) in xt.iter_mut().enumerate() {
-                    let ch = (k % TENSOR_LEN) / (TENSOR_H * TENSOR_W);
-                    *v = (sa * *v as f64 + shift * sched.config.q[ch]) as f32;
-                }
-                let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &model.device);
-                let eps: Vec<f32> = net
-                    .forward(xt_t, &vec![t; b], ctx_t.clone(), sched)
-                    .into_data()
-                    .try_into_vec::<f32>()
-                    .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
-                for (k, v) in x.iter_mut().enumerate() {
-                    *v -= (sd / sa * eps[k] as f64) as f32;
-                }
-                for i in 0..b {
-                    let ctx = &contexts[members[i]];
-                    for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
-                        for p in 0..POINTS_PER_CELL {
-                            let (r, col) = slot(n, p);
-                            for ch in 0..3 {
-                                x[i * TENSOR_LEN + flat(ch, r, col)] = 0.0;
-                            }
-                        }
-                    }
-                }
-            }
+            refine_passes(model, net, opts, contexts, members, &ctx_t, &mut x)?;
         }
         for i in 0..b {
             out.tensors[members[i]] = x[i * TENSOR_LEN..(i + 1) * TENSOR_LEN].to_vec();
@@ -407,6 +313,138 @@ pub fn reverse_diffusion(
     }
     check_progress(progress, 1.0, "reverse diffusion")?;
     Ok(out)
+}
+
+/// Every sampler option and input checked before any work.
+fn check_sampler_inputs(inputs: &[Vec<f32>], contexts: &[Context], opts: &SamplerOptions) -> Result<()> {
+    if opts.start_noise.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+        return Err(Error::InvalidArgument(format!("the sampler's start noise must be positive, got {:?}", opts.start_noise)));
+    }
+    if !opts.guidance.is_finite() || !opts.eps_scale.is_finite() || opts.kernel_gate.is_some_and(|g| !g.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "sampler weights must be finite (guidance {}, eps_scale {}, kernel_gate {:?})",
+            opts.guidance, opts.eps_scale, opts.kernel_gate
+        )));
+    }
+    if inputs.len() != contexts.len() {
+        return Err(Error::InvalidArgument(format!(
+            "{} input tensors for {} contexts",
+            inputs.len(),
+            contexts.len()
+        )));
+    }
+    for (i, x) in inputs.iter().enumerate() {
+        if x.len() != TENSOR_LEN {
+            return Err(Error::InvalidArgument(format!("input tensor {i} has {} values, expected {TENSOR_LEN}", x.len())));
+        }
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(Error::InvalidArgument(format!("input tensor {i} holds a non-finite value")));
+        }
+    }
+    Ok(())
+}
+
+/// Candidates sharing a start step run together, in batches of at most `batch`, in
+/// index order; the latest start first.
+fn groups_by_start(starts: &[usize], batch: usize) -> Vec<Vec<usize>> {
+    let n = starts.len();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut distinct: Vec<usize> = starts.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    for &t0 in distinct.iter().rev() {
+        let members: Vec<usize> = (0..n).filter(|&i| starts[i] == t0).collect();
+        groups.extend(members.chunks(batch).map(|c| c.to_vec()));
+    }
+    groups
+}
+
+/// The network's noise estimate for the batch `x` (`b` candidates) at step `t`:
+/// with guidance, one batch of 2b (conditional first, "labels unknown" second)
+/// combined as c + w (c - u); then scaled by `opts.eps_scale`.
+#[allow(clippy::too_many_arguments)]
+fn network_eps(model: &Model, net: &super::Net, x: &[f32], t: usize, b: usize, ctx_t: &Tensor<2>, ctx_g: Option<&Tensor<2>>, opts: &SamplerOptions) -> Result<Vec<f32>> {
+    let sched = &model.schedule;
+    let (xin, bb, ct) = match ctx_g {
+        Some(g) => ([x, x].concat(), 2 * b, g.clone()),
+        None => (x.to_vec(), b, ctx_t.clone()),
+    };
+    let xt = Tensor::<4>::from_data(TensorData::new(xin, [bb, 3, TENSOR_H, TENSOR_W]), &model.device);
+    let eps = net.forward(xt, &vec![t; bb], ct, sched);
+    let mut eps: Vec<f32> = eps
+        .into_data()
+        .try_into_vec::<f32>()
+        .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
+    if ctx_g.is_some() {
+        let w = opts.guidance as f32;
+        let (c, u) = eps.split_at(b * TENSOR_LEN);
+        eps = c.iter().zip(u).map(|(c, u)| c + w * (c - u)).collect();
+    }
+    if opts.eps_scale != 1.0 {
+        let f = opts.eps_scale as f32;
+        eps.iter_mut().for_each(|v| *v *= f);
+    }
+    Ok(eps)
+}
+
+/// The null cells of every member's context set to a forward sample of x_0 = 0 at
+/// step `s` (exactly 0 at s = 0).
+fn null_blocks_at(sched: &super::schedule::Schedule, s: usize, contexts: &[Context], members: &[usize], rngs: &mut [impl rand::Rng], next: &mut [f32]) {
+    for i in 0..members.len() {
+        let ctx = &contexts[members[i]];
+        let base = i * TENSOR_LEN;
+        let (sd, shift) = ((1.0 - sched.alpha_bar[s]).sqrt(), sched.qcoef[s]);
+        for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
+            for p in 0..POINTS_PER_CELL {
+                let (r, col) = slot(n, p);
+                for ch in 0..3 {
+                    let v = if s == 0 {
+                        0.0
+                    } else {
+                        let zv: f64 = StandardNormal.sample(&mut rngs[i]);
+                        sd * zv + shift * sched.config.q[ch]
+                    };
+                    next[base + flat(ch, r, col)] = v as f32;
+                }
+            }
+        }
+    }
+}
+
+/// `opts.refine_passes` one-step refinements at `opts.refine_t`: noise x to that
+/// step, subtract the predicted noise, null cells back to 0.
+fn refine_passes(model: &Model, net: &super::Net, opts: &SamplerOptions, contexts: &[Context], members: &[usize], ctx_t: &Tensor<2>, x: &mut [f32]) -> Result<()> {
+    let (sched, b) = (&model.schedule, members.len());
+    let t = opts.refine_t.clamp(1, sched.steps());
+    let (sa, sd, shift) = (sched.alpha_bar[t].sqrt(), (1.0 - sched.alpha_bar[t]).sqrt(), sched.qcoef[t]);
+    for _ in 0..opts.refine_passes {
+        let mut xt = x.to_vec();
+        for (k, v) in xt.iter_mut().enumerate() {
+            let ch = (k % TENSOR_LEN) / (TENSOR_H * TENSOR_W);
+            *v = (sa * *v as f64 + shift * sched.config.q[ch]) as f32;
+        }
+        let xt_t = Tensor::<4>::from_data(TensorData::new(xt, [b, 3, TENSOR_H, TENSOR_W]), &model.device);
+        let eps: Vec<f32> = net
+            .forward(xt_t, &vec![t; b], ctx_t.clone(), sched)
+            .into_data()
+            .try_into_vec::<f32>()
+            .map_err(|e| Error::Internal(format!("reading the network output: {e:?}")))?;
+        for (k, v) in x.iter_mut().enumerate() {
+            *v -= (sd / sa * eps[k] as f64) as f32;
+        }
+        for i in 0..b {
+            let ctx = &contexts[members[i]];
+            for n in (0..NUM_CELLS).filter(|&n| ctx.labels[n] == Primitive::Null) {
+                for p in 0..POINTS_PER_CELL {
+                    let (r, col) = slot(n, p);
+                    for ch in 0..3 {
+                        x[i * TENSOR_LEN + flat(ch, r, col)] = 0.0;
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The strided step with x_0 clipped per point to its cell's box: x_0 from (y_t, eps),
