@@ -324,7 +324,30 @@ pub fn solve_poisson(
     }
     let nb = sp.num_basis();
     let on_boundary = boundary_functions(sp);
-    // --- Dirichlet data: L2 projection on the boundary faces
+    // Dirichlet data: L2 projection on the boundary faces
+    let (bmap, cb) = dirichlet_projection(sp, &on_boundary, &dirichlet, opts)?;
+    let nbd = cb.len();
+    // the interior system with the boundary coefficients moved to the right-hand side
+    let (imap, ci, solver, iterations) = interior_solution(sp, &on_boundary, &bmap, &cb, &source, opts)?;
+    let mut coefficients = vec![0.0; nb];
+    for i in 0..nb {
+        coefficients[i] = if imap[i] != u32::MAX { ci[imap[i] as usize] } else { cb[bmap[i] as usize] };
+    }
+    Ok(PoissonSolution {
+        coefficients,
+        dofs: nb,
+        boundary_dofs: nbd,
+        solver,
+        iterations,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The boundary functions' coefficients: the L2 projection of `dirichlet` on the
+/// boundary faces. Returns (function -> boundary index, u32::MAX for interior
+/// functions; the coefficients by boundary index).
+fn dirichlet_projection(sp: &Spline, on_boundary: &[bool], dirichlet: &(impl Fn([f64; 3]) -> f64 + Sync), opts: &PoissonOptions) -> Result<(Vec<u32>, Vec<f64>)> {
+    let nb = sp.num_basis();
     let mut bmap = vec![u32::MAX; nb];
     let mut bids = Vec::new();
     for (i, &b) in on_boundary.iter().enumerate() {
@@ -389,7 +412,23 @@ pub fn solve_poisson(
     }
     let opts_direct = PoissonOptions { solver: LinearSolver::Auto, ..opts.clone() };
     let (cb, _, _) = solve_spd(nbd, &mt, mr, &opts_direct)?;
-    // --- interior system
+    Ok((bmap, cb))
+}
+
+/// The interior functions' coefficients: the stiffness system assembled element by
+/// element with the boundary coefficients `cb` on the right-hand side. Returns
+/// (function -> interior index, u32::MAX for boundary functions; the solution; the
+/// solver used; its iterations).
+#[allow(clippy::type_complexity)]
+fn interior_solution(
+    sp: &Spline,
+    on_boundary: &[bool],
+    bmap: &[u32],
+    cb: &[f64],
+    source: &(impl Fn([f64; 3]) -> f64 + Sync),
+    opts: &PoissonOptions,
+) -> Result<(Vec<u32>, Vec<f64>, String, usize)> {
+    let nb = sp.num_basis();
     let mut imap = vec![u32::MAX; nb];
     let mut nfree = 0usize;
     for i in 0..nb {
@@ -450,18 +489,7 @@ pub fn solve_poisson(
         }
     }
     let (ci, solver, iterations) = solve_spd(nfree, &kt, kr, opts)?;
-    let mut coefficients = vec![0.0; nb];
-    for i in 0..nb {
-        coefficients[i] = if imap[i] != u32::MAX { ci[imap[i] as usize] } else { cb[bmap[i] as usize] };
-    }
-    Ok(PoissonSolution {
-        coefficients,
-        dofs: nb,
-        boundary_dofs: nbd,
-        solver,
-        iterations,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    Ok((imap, ci, solver, iterations))
 }
 
 impl PoissonSolution {
