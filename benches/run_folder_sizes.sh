@@ -7,14 +7,17 @@
 # Usage: bash benches/run_folder_sizes.sh [OUT] [MESH_DIR]
 #   OUT default build/sizes; MESH_DIR default tests/data/meshes.
 #   SDDPM=path picks the binary (default target/release/sddpm, built first);
-#   MESHES="cinolib_torus hexgen_rod" runs only those.
+#   MESHES="cinolib_torus hexgen_rod" runs only those; TABLE_ONLY=1 runs nothing
+#   and prints the table of the folders OUT already holds (OUT may be several
+#   folders separated by ':', each with its status.txt).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-build/sizes}
 meshes=${2:-tests/data/meshes}
 bin=${SDDPM:-target/release/sddpm}
-[ -n "${SDDPM:-}" ] || cargo build --release -q
-mkdir -p "$out"
+if [ -n "${TABLE_ONLY:-}" ]; then meshes=/nonexistent; fi
+[ -n "${SDDPM:-}" ] || [ -n "${TABLE_ONLY:-}" ] || cargo build --release -q
+[ -n "${TABLE_ONLY:-}" ] || mkdir -p "$out"
 for f in "$meshes"/*.off "$meshes"/*.obj "$meshes"/*.stl; do
   [ -f "$f" ] || continue
   n=$(basename "${f%.*}")
@@ -26,17 +29,17 @@ for f in "$meshes"/*.off "$meshes"/*.obj "$meshes"/*.stl; do
 done
 python3 - "$out" <<'PY'
 import json, os, sys
-out = sys.argv[1]
 status = {}
-for line in open(os.path.join(out, "status.txt")):
-    n, rc, s = line.split()
-    status[n] = (int(rc), float(s))
+for out in sys.argv[1].split(":"):
+    for line in open(os.path.join(out, "status.txt")):
+        n, rc, s = line.split()
+        status[n] = (int(rc), float(s), out)
 mb = lambda b: f"{b / 1e6:.2f}"
 print("| mesh | elements | basis functions | folder MB | spline.bext | spline.vtu | report.html | hex files | other | files | s |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 total = 0
 for n in sorted(status):
-    rc, s = status[n]
+    rc, s, out = status[n]
     p = os.path.join(out, n, "report.json")
     if rc != 0 or not os.path.exists(p):
         print(f"| {n} | exit {rc} | | | | | | | | | {s:.0f} |")
