@@ -1,4 +1,4 @@
-// VTK peer test of the hex exports (issue 6): every VTU / legacy VTK file written by
+// VTK peer test of the hex exports: every VTU / legacy VTK file written by
 // `cargo test --release --test hex_export` is read back with VTK's readers; node and
 // element counts must match what the library wrote (NAME.counts), every cell must be a
 // VTK_HEXAHEDRON, and vtkMeshQuality's hex scaled Jacobian must equal the library's
@@ -10,6 +10,7 @@
 #include <vtkDataArray.h>
 #include <vtkMeshQuality.h>
 #include <vtkNew.h>
+#include <vtkPointData.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkUnstructuredGridReader.h>
@@ -113,4 +114,37 @@ TEST(VtkQuality, ZooHasTheHandComputedValues) {
   EXPECT_NEAR(v->GetTuple1(2), 1.0 / std::sqrt(1.125), 1e-12);       // tapered
   EXPECT_NEAR(v->GetTuple1(3), 2.0 / (3.0 * std::sqrt(6.0)), 1e-12); // one corner pulled
   EXPECT_NEAR(v->GetTuple1(4), -1.0, 1e-12);                         // flipped node order
+}
+
+// The sampled spline (spline.vtu: binary, raw appended data) reads with VTK's XML
+// reader: the counts written next to it, every cell a VTK_HEXAHEDRON, the point
+// data "jacobian" and "scaled_jacobian" and the cell data "element" and "level".
+TEST(VtkQuality, SplineVtuReadsWithVtk) {
+  std::ifstream counts(std::string(SDDPM_HEX_FIXTURES) + "/spline_vtu.counts");
+  ASSERT_TRUE(counts.good()) << "run cargo test --release --test hex_export first";
+  long points = 0, cells = 0, elements = 0;
+  counts >> points >> cells >> elements;
+  vtkNew<vtkXMLUnstructuredGridReader> r;
+  r->SetFileName((std::string(SDDPM_HEX_FIXTURES) + "/spline.vtu").c_str());
+  r->Update();
+  vtkUnstructuredGrid* g = r->GetOutput();
+  ASSERT_EQ(g->GetNumberOfPoints(), points);
+  ASSERT_EQ(g->GetNumberOfCells(), cells);
+  for (vtkIdType i = 0; i < g->GetNumberOfCells(); ++i) {
+    ASSERT_EQ(g->GetCellType(i), VTK_HEXAHEDRON) << "cell " << i;
+  }
+  for (const char* name : {"jacobian", "scaled_jacobian"}) {
+    vtkDataArray* a = g->GetPointData()->GetArray(name);
+    ASSERT_NE(a, nullptr) << name;
+    ASSERT_EQ(a->GetNumberOfTuples(), points) << name;
+  }
+  vtkDataArray* sj = g->GetPointData()->GetArray("scaled_jacobian");
+  for (vtkIdType i = 0; i < points; ++i) {
+    EXPECT_GT(sj->GetTuple1(i), 0.0) << "point " << i;
+    EXPECT_LE(sj->GetTuple1(i), 1.0 + 1e-6) << "point " << i;
+  }
+  vtkDataArray* element = g->GetCellData()->GetArray("element");
+  ASSERT_NE(element, nullptr);
+  ASSERT_NE(g->GetCellData()->GetArray("level"), nullptr);
+  EXPECT_EQ(element->GetTuple1(cells - 1), elements - 1);
 }

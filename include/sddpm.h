@@ -828,7 +828,7 @@ sddpm_status sddpm_spline_evaluate(const struct sddpm_spline *s,
                                    double *xyz,
                                    double *jacobian);
 
-// Write spline.bext, model.k (the LS-DYNA deck including it), spline.vtk and
+// Write spline.bext, model.k (the LS-DYNA deck including it), spline.vtu and
 // spline_control.vtk into the folder `dir` (created if missing).
 //
 // # Safety

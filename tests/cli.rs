@@ -70,10 +70,16 @@ fn run_writes_the_whole_run_folder() {
     let (code, out, err) = sddpm(&["run", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "--json", "-q"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("one JSON object");
-    for f in ["polycube.obj", "hex.vtu", "hex.vtk", "hex.mesh", "hex.k", "spline.bext", "model.k", "report.json", "report.html", "scaled_jacobian.png", "input.png", "polycube.png", "hex.png"] {
+    for f in ["polycube.obj", "hex.vtu", "hex.vtk", "hex.mesh", "hex.k", "spline.bext", "model.k", "spline.vtu", "report.json", "report.html", "scaled_jacobian.png", "input.png", "polycube.png", "hex.png", "cut.png"] {
         let p = dir.join(f);
         assert!(p.is_file() && std::fs::metadata(&p).unwrap().len() > 0, "missing {f}");
     }
+    assert!(!dir.join("spline.vtk").exists(), "the sampled spline is spline.vtu only");
+    // spline.vtu: 2 sub-cells per element edge by default, 8 cells per element
+    let vtu = sddpm::export::spline_vtu::parse_spline_vtu(&std::fs::read(dir.join("spline.vtu")).unwrap()).unwrap();
+    let types = vtu.iter().find(|a| a.name == "types").unwrap();
+    assert_eq!(types.values.len() as u64, 8 * v["spline"]["elements"].as_u64().unwrap());
+    assert_eq!(v["spline"]["sample_cells_per_edge"], 2);
     for k in ["path", "vertices", "triangles", "genus", "volume"] {
         assert!(!v["input"][k].is_null(), "input.{k}");
     }
@@ -99,10 +105,24 @@ fn run_writes_the_whole_run_folder() {
     assert!(v["hex"]["hausdorff_relative"].as_f64().unwrap() < 0.01);
     assert_eq!(v["spline"]["elements"], v["hex"]["elements"]);
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    for needle in ["<img src=\"scaled_jacobian.png\"", "<img src=\"hex.png\"", "min scaled Jacobian", "THC+Z at (0,0,0)", "Mesh made by: polycube", "goal-pass", "irregular edges", "Provenance"] {
+    for needle in ["data-file=\"scaled_jacobian.png\"", "data-file=\"hex.png\"", "data-file=\"cut.png\"", "id=\"cut-view\"", "min scaled Jacobian", "THC+Z at (0,0,0)", "Mesh made by: polycube", "goal-pass", "irregular edges", "Provenance"] {
         assert!(html.contains(needle), "report.html lacks {needle}");
     }
     assert!(!html.contains("THC+Z,null"), "contexts are readable");
+    // one self-contained page: every picture a data URI, links only to the run's files
+    let srcs: Vec<&str> = html.split(" src=\"").skip(1).map(|t| &t[..t.find('"').unwrap()]).collect();
+    assert!(srcs.len() >= 6 && srcs.iter().all(|u| u.starts_with("data:image/png;base64,")), "{:?}", srcs.iter().map(|u| &u[..u.len().min(40)]).collect::<Vec<_>>());
+    let names: Vec<&str> = v["files"].as_array().unwrap().iter().map(|f| f["name"].as_str().unwrap()).collect();
+    for href in html.split("href=\"").skip(1).map(|t| &t[..t.find('"').unwrap()]) {
+        assert!(names.contains(&href), "a link to {href}, not a file of the run");
+    }
+    assert!(!html.contains("http://") && !html.contains("https://"), "no external link");
+    assert_eq!(v["cut_view"]["file"], "cut.png");
+    assert!(v["cut_view"]["elements"].as_u64().unwrap() > 0);
+    // the sizes of every file and their total
+    let total: u64 = v["files"].as_array().unwrap().iter().map(|f| f["bytes"].as_u64().unwrap()).sum();
+    assert_eq!(v["files_bytes"].as_u64().unwrap(), total);
+    assert!(v["hex"]["mean_edge_length"].as_f64().unwrap() > 0.0);
     // provenance: version, command line, options
     assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
     assert!(v["command"].as_str().unwrap().contains("run tests/data/meshes/cgal_hole.off"), "{}", v["command"]);
@@ -111,9 +131,13 @@ fn run_writes_the_whole_run_folder() {
     assert_eq!(v["mesh_path"]["from"], "polycube");
     assert_eq!(v["hex"]["goals"].as_array().unwrap().len(), 4);
     assert!(v["hex"]["irregular_edges"].is_u64());
-    // hex.k is a keyword deck with as many elements as the report says
+    // hex.k is a keyword deck that runs alone, with as many elements as the report says
     let k = std::fs::read_to_string(dir.join("hex.k")).unwrap();
-    assert!(k.contains("*NODE") && k.contains("*ELEMENT_SOLID") && k.trim_end().ends_with("*END"));
+    assert!(k.starts_with("*KEYWORD") && k.contains("*NODE") && k.contains("*ELEMENT_SOLID") && k.trim_end().ends_with("*END"));
+    for kw in ["*PART", "*SECTION_SOLID", "*MAT_ELASTIC", "*CONTROL_IMPLICIT_EIGENVALUE"] {
+        assert!(k.contains(kw), "hex.k lacks {kw}");
+    }
+    assert_eq!(sddpm::export::hexfmt::parse_lsdyna(&k).unwrap().elements.len() as u64, v["hex"]["elements"].as_u64().unwrap());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -276,6 +300,19 @@ fn batch_meshes_a_folder_with_a_summary() {
     }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("| hole | OK | 1 |") && md.contains("INVALID_MESH"), "{md}");
+    // every part's files with their sizes, and its status
+    for r in runs {
+        let folder = r["folder"].as_str().unwrap();
+        let files = r["files"].as_array().unwrap();
+        assert_eq!(files.is_empty(), r["status"] != "OK", "{r}");
+        for f in files {
+            let name = f["name"].as_str().unwrap();
+            assert_eq!(std::fs::metadata(out.join(folder).join(name)).unwrap().len(), f["bytes"].as_u64().unwrap(), "{folder}/{name}");
+            assert!(md.contains(&format!("[{folder}/{name}]({folder}/{name})")), "summary.md lacks {folder}/{name}");
+        }
+    }
+    assert!(md.contains("### open (INVALID_MESH)\n\nno file written"), "{md}");
+    assert_eq!(v["bytes"].as_u64().unwrap(), runs.iter().map(|r| r["files_bytes"].as_u64().unwrap()).sum::<u64>());
     // the used output folder is refused; --force clears the tool's files in it and
     // in each input's folder (a file of the caller's stays) and meshes again
     let batch = ["batch", inp.to_str().unwrap(), "-o", out.to_str().unwrap(), "--steps", "10", "--level", "1", "--no-spline", "-q"];
@@ -291,9 +328,63 @@ fn batch_meshes_a_folder_with_a_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// report.html renders in headless Chromium: the screenshot is not blank and shows
-/// the pictures (many distinct colours). Chromium comes with the test command's
-/// packages; without it the test is skipped unless SDDPM_REQUIRE_CHROMIUM=1.
+/// A screenshot by headless Chromium of `html` copied alone into `dir`: the page
+/// must show everything without the files of its run folder.
+fn screenshot(chromium: &str, html: &std::path::Path, dir: &std::path::Path) -> image::RgbImage {
+    std::fs::create_dir_all(dir).unwrap();
+    let alone = dir.join("report.html");
+    std::fs::copy(html, &alone).unwrap();
+    let shot = dir.join("screenshot.png");
+    let out = Command::new(chromium)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--window-size=1280,2400"])
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(format!("file://{}", alone.display()))
+        .output()
+        .expect("run chromium");
+    assert!(shot.is_file(), "no screenshot: {}", String::from_utf8_lossy(&out.stderr));
+    image::open(&shot).expect("a PNG").to_rgb8()
+}
+
+/// What the screenshot shows: not blank, the pictures (many distinct colours), the
+/// path box (#f7f7f7) above the goals, and a mark (green #1a7f37 or red #b42318)
+/// on each of the 4 goal rows: the first 4 bands of mark-coloured pixels from the
+/// top, evenly spaced as table rows are, with no fifth one in the table.
+fn check_screenshot(img: &image::RgbImage, what: &str) {
+    let (w, h) = img.dimensions();
+    let non_white = img.pixels().filter(|p| p.0 != [255, 255, 255]).count() as f64 / (w * h) as f64;
+    let colours: std::collections::HashSet<[u8; 3]> = img.pixels().map(|p| p.0.map(|c| c / 16)).collect();
+    assert!(non_white > 0.05, "{what}: the page looks blank: {:.1}% non-white", 100.0 * non_white);
+    assert!(colours.len() > 50, "{what}: only {} colours: the pictures did not load", colours.len());
+    let near = |p: [u8; 3], c: [u8; 3]| p.iter().zip(c).map(|(&a, b)| (a as i32 - b as i32).pow(2)).sum::<i32>() < 40 * 40;
+    let marked: Vec<bool> = (0..h).map(|y| (0..w).filter(|&x| { let p = img.get_pixel(x, y).0; near(p, [26, 127, 55]) || near(p, [180, 35, 24]) }).count() >= 2).collect();
+    let mut bands: Vec<(u32, u32)> = Vec::new();
+    for y in 0..h {
+        if marked[y as usize] {
+            match bands.last_mut() {
+                Some(b) if b.1 + 4 >= y => b.1 = y,
+                _ => bands.push((y, y)),
+            }
+        }
+    }
+    assert!(bands.len() >= 4, "{what}: {} mark rows in the screenshot: {bands:?}", bands.len());
+    let centre = |b: (u32, u32)| (b.0 + b.1) as f64 / 2.0;
+    let step = centre(bands[1]) - centre(bands[0]);
+    for k in 1..4 {
+        let d = centre(bands[k]) - centre(bands[k - 1]);
+        assert!((d - step).abs() <= 4.0 && step > 10.0, "{what}: goal rows not evenly spaced: {bands:?}");
+    }
+    if let Some(b) = bands.get(4) {
+        assert!(centre(*b) - centre(bands[3]) > 1.5 * step, "{what}: a fifth mark row: {bands:?}");
+    }
+    let path_box = (0..bands[0].0).flat_map(|y| (0..w).map(move |x| (x, y))).filter(|&(x, y)| img.get_pixel(x, y).0 == [247, 247, 247]).count();
+    assert!(path_box > 2_000, "{what}: no path box above the goals ({path_box} pixels)");
+}
+
+/// report.html renders in headless Chromium as one self-contained page (copied
+/// alone into another folder), for a polycube mesh and for a fallback mesh: the
+/// screenshot shows the pictures, the path and a mark on every goal's row, and the
+/// rendered page names the path. Chromium comes with the test command's packages;
+/// without it the test is skipped unless SDDPM_REQUIRE_CHROMIUM=1.
 #[test]
 fn report_html_renders_in_headless_chromium() {
     let chromium = ["chromium", "chromium-browser", "google-chrome"]
@@ -306,34 +397,17 @@ fn report_html_renders_in_headless_chromium() {
     };
     let dir = std::env::temp_dir().join(format!("sddpm-cli-html-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", dir.to_str().unwrap(), "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "-q"]);
+    let pc = dir.join("polycube");
+    let (code, _, err) = sddpm(&["run", "tests/data/meshes/cinolib_torus.obj", "-o", pc.to_str().unwrap(), "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "-q"]);
     assert_eq!(code, 0, "{err}");
-    let shot = dir.join("screenshot.png");
-    let url = format!("file://{}", dir.join("report.html").display());
-    let out = Command::new(chromium)
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--window-size=1280,2400"])
-        .arg(format!("--screenshot={}", shot.display()))
-        .arg(&url)
-        .output()
-        .expect("run chromium");
-    assert!(shot.is_file(), "no screenshot: {}", String::from_utf8_lossy(&out.stderr));
-    let img = image::open(&shot).expect("a PNG").to_rgb8();
-    let (w, h) = img.dimensions();
-    let non_white = img.pixels().filter(|p| p.0 != [255, 255, 255]).count() as f64 / (w * h) as f64;
-    let mut colours = std::collections::HashSet::new();
-    for p in img.pixels() {
-        colours.insert(p.0.map(|c| c / 16));
-    }
-    assert!(non_white > 0.05, "the page looks blank: {:.1}% non-white", 100.0 * non_white);
-    assert!(colours.len() > 50, "only {} colours: the pictures did not load", colours.len());
-    // the page as Chromium rendered it names the path and marks every goal, for a
-    // polycube mesh and for a fallback mesh
-    let rendered = |url: &str| {
-        let out = Command::new(chromium).args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"]).arg(url).output().expect("run chromium");
+    check_screenshot(&screenshot(chromium, &pc.join("report.html"), &dir.join("alone-polycube")), "polycube mesh");
+    // the page as Chromium rendered it names the path and marks every goal
+    let rendered = |html: &std::path::Path| {
+        let out = Command::new(chromium).args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"]).arg(format!("file://{}", html.display())).output().expect("run chromium");
         String::from_utf8_lossy(&out.stdout).into_owned()
     };
     let marks = |dom: &str| dom.matches("goal-pass").count() + dom.matches("goal-fail").count();
-    let dom = rendered(&url);
+    let dom = rendered(&dir.join("alone-polycube/report.html"));
     assert!(dom.contains("Mesh made by: polycube") && dom.contains("THC+Z at (0,0,0)"), "no path in the rendered page");
     assert_eq!(marks(&dom), 4, "a mark per goal");
     let fb = dir.join("fallback");
@@ -342,7 +416,8 @@ fn report_html_renders_in_headless_chromium() {
         "--voxel-resolution", "12", "--voxel-refinements", "0", "--goal-hausdorff", "0.025", "-q",
     ]);
     assert_eq!(code, 0, "{err}");
-    let dom = rendered(&format!("file://{}", fb.join("report.html").display()));
+    check_screenshot(&screenshot(chromium, &fb.join("report.html"), &dir.join("alone-fallback")), "fallback mesh");
+    let dom = rendered(&dir.join("alone-fallback/report.html"));
     assert!(dom.contains("Mesh made by: grid-based fallback"), "no fallback path in the rendered page");
     assert_eq!(marks(&dom), 4, "a mark per goal");
     let _ = std::fs::remove_dir_all(&dir);
@@ -361,7 +436,7 @@ fn run_refuses_a_used_folder_unless_forced() {
     let base = ["run", "tests/data/meshes/cgal_hole.off", "-o", d, "--labels", "THC+Z,0,0,0,0,0,0,0,0,0,0,0", "--steps", "10", "--level", "1", "-q"];
     let (code, _, err) = sddpm(&base);
     assert_eq!(code, 0, "{err}");
-    for f in ["spline.bext", "model.k", "spline.vtk", "spline_control.vtk"] {
+    for f in ["spline.bext", "model.k", "spline.vtu", "spline_control.vtk"] {
         assert!(dir.join(f).is_file(), "{f}");
     }
     let (code, _, err) = sddpm(&base);
@@ -378,7 +453,7 @@ fn run_refuses_a_used_folder_unless_forced() {
     let present: std::collections::BTreeSet<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n != "notes.txt").collect();
     assert_eq!(listed, present, "no file of the first run is left that the second did not write");
-    for f in ["spline.bext", "model.k", "spline.vtk", "spline_control.vtk"] {
+    for f in ["spline.bext", "model.k", "spline.vtu", "spline_control.vtk"] {
         assert!(!dir.join(f).exists(), "{f} of the first run is left");
     }
     for f in files {
@@ -410,6 +485,8 @@ fn torus_run_folder_stays_compact() {
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let sizes: Vec<String> = report["files"].as_array().unwrap().iter().map(|f| format!("{} {}", f["name"], f["bytes"])).collect();
     assert!(total < 40_000_000, "{total} bytes: {sizes:?}");
+    assert_eq!(report["files_bytes"].as_u64().unwrap(), total, "report.json states the folder's size");
+    assert!(!dir.join("spline.vtk").exists() && dir.join("spline.vtu").is_file());
     let b = sddpm::export::bext::read_bext(&dir.join("spline.bext")).unwrap();
     assert_eq!(b.elements.len() as u64, report["spline"]["elements"].as_u64().unwrap());
     assert_eq!(b.nodes.len() as u64, report["spline"]["basis_functions"].as_u64().unwrap());

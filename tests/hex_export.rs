@@ -2,7 +2,8 @@
 //! parsed back with the project's readers. The files stay in target/hex-fixtures for
 //! the C++ test (cpp_tests/test_vtk_quality.cpp), which reads the VTU / VTK files with
 //! VTK's readers and compares vtkMeshQuality's hex scaled Jacobian with the cell data
-//! "scaled_jacobian" written here.
+//! "scaled_jacobian" written here, and reads the sampled spline (spline.vtu) with
+//! VTK's XML reader.
 
 use sddpm::context::Context;
 use sddpm::error::NoProgress;
@@ -103,6 +104,15 @@ fn pipeline_meshes_round_trip() {
     write_all("hole_level1", &r.mesh);
     // the mapped mesh too: it has elements of every quality down to nearly flat ones
     write_all("hole_level1_mapped", &r.mapped);
+    // the spline of the mesh sampled as spline.vtu (2 sub-cells per element edge), for
+    // the VTK test's reader; spline_vtu.counts: points, cells, elements
+    let sp = sddpm::spline::build_spline(&r.mesh, None, &sddpm::spline::SplineOptions::default(), &mut NoProgress).unwrap();
+    let d = fixtures();
+    sddpm::export::spline_vtu::write_spline_vtu(&d.join("spline.vtu"), &sp, 2).unwrap();
+    let ne = sp.num_elements();
+    std::fs::write(d.join("spline_vtu.counts"), format!("{} {} {}\n", 27 * ne, 8 * ne, ne)).unwrap();
+    let back = sddpm::export::spline_vtu::parse_spline_vtu(&std::fs::read(d.join("spline.vtu")).unwrap()).unwrap();
+    assert_eq!(back.iter().find(|a| a.name == "types").unwrap().values.len(), 8 * ne);
 }
 
 #[test]
@@ -113,7 +123,7 @@ fn run_folder_files_and_report_keys() {
     let r = build_hex_mesh(&input, &HexOptions { map: MapOptions { level: Some(1), ..Default::default() }, ..Default::default() }, &mut NoProgress).unwrap();
     let out = fixtures().join("run");
     std::fs::create_dir_all(&out).unwrap();
-    sddpm::export::hexfmt::write_hex_files(&out, &r).unwrap();
+    sddpm::export::hexfmt::write_hex_files(&out, &r, &Default::default()).unwrap();
     let j = sddpm::hex::report_json(&r);
     for key in ["vertices", "elements", "min_scaled_jacobian", "mean_scaled_jacobian", "inverted", "hausdorff_relative", "file"] {
         assert!(j.get(key).is_some(), "report.json hex.{key} missing");

@@ -300,5 +300,69 @@ fn spline_write_outputs_for_the_pipeline() {
     assert_eq!(b.elements.len(), sp.num_elements());
     let deck = std::fs::read_to_string(dir.join("model.k")).unwrap();
     assert!(deck.contains("\nspline.bext\n"));
-    assert!(dir.join("spline.vtk").exists() && dir.join("spline_control.vtk").exists());
+    assert!(dir.join("spline.vtu").exists() && dir.join("spline_control.vtk").exists());
+    assert!(!dir.join("spline.vtk").exists(), "the legacy sampled file is off by default");
+    assert_eq!(j["vtu"], "spline.vtu");
+    assert_eq!(j["sample_cells_per_edge"], 2);
+}
+
+/// spline.vtu holds the legacy VTK's grid (points as 32-bit floats), cells and
+/// data, and reads back with the project's reader.
+#[test]
+fn spline_vtu_matches_the_legacy_form() {
+    let sp = refined_spline();
+    for s in [1, 2, 3] {
+        let legacy = parse_vtk_legacy(&spline_vtk_string(&sp, s).unwrap()).unwrap();
+        let b = sddpm::export::spline_vtu::spline_vtu_bytes(&sp, s).unwrap();
+        assert!(b.starts_with(b"<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\""));
+        let arrays = sddpm::export::spline_vtu::parse_spline_vtu(&b).unwrap();
+        let get = |n: &str| &arrays.iter().find(|a| a.name == n).unwrap_or_else(|| panic!("no {n}")).values;
+        let pts = get("Points");
+        assert_eq!(pts.len(), 3 * legacy.nodes.len());
+        for (k, p) in legacy.nodes.iter().enumerate() {
+            for i in 0..3 {
+                assert!((pts[3 * k + i] - p[i]).abs() <= 1e-6 * (1.0 + p[i].abs()), "point {k}");
+            }
+        }
+        let conn = get("connectivity");
+        let flat: Vec<f64> = legacy.elements.iter().flat_map(|e| e.iter().map(|&v| v as f64)).collect();
+        assert_eq!(conn, &flat);
+        let offsets = get("offsets");
+        assert_eq!(offsets.len(), legacy.elements.len());
+        assert_eq!(*offsets.last().unwrap(), 8.0 * legacy.elements.len() as f64);
+        assert!(get("types").iter().all(|&t| t == 12.0));
+        assert_eq!(get("element").len(), legacy.elements.len());
+        assert_eq!(get("element")[s * s * s], 1.0);
+        assert_eq!(get("level").len(), legacy.elements.len());
+        assert_eq!(get("jacobian").len(), legacy.nodes.len());
+        assert!(get("scaled_jacobian").iter().all(|&q| q > 0.0 && q <= 1.0 + 1e-6));
+    }
+    assert!(sddpm::export::spline_vtu::spline_vtu_bytes(&sp, 0).is_err());
+    // write_outputs refuses a sample count out of range
+    let d = tmpdir();
+    let o = sddpm::export::spline_files::OutputOptions { vtk_samples: 9, ..Default::default() };
+    assert!(sddpm::export::spline_files::write_outputs(d.path(), &sp, &o).is_err());
+}
+
+/// The decks' material in each unit system: steel and aluminium scaled from SI.
+#[test]
+fn deck_material_in_each_unit_system() {
+    use sddpm::export::lsdyna::{model_cards, Analysis, Material, Units};
+    for (units, ro, e) in [(Units::MmTonneS, 7.85e-9, 210000.0), (Units::MKgS, 7850.0, 210e9), (Units::MmKgMs, 7.85e-6, 210.0)] {
+        let o = DeckOptions::default().with_material(Material::steel(), units).unwrap();
+        let deck = parse_deck(&iga_deck_string("x.bext", &o).unwrap());
+        let card = &deck.iter().find(|k| k.name == "MAT_ELASTIC").unwrap().cards[0];
+        let v: Vec<f64> = [10, 20, 30].iter().map(|&c| field(card, c, 10).parse().unwrap()).collect();
+        assert!((v[0] - ro).abs() <= 1e-9 * ro && (v[1] - e).abs() <= 1e-9 * e && v[2] == 0.3, "{units:?}: {v:?}");
+    }
+    assert_eq!(Material::parse("aluminium").unwrap(), Material::aluminium());
+    assert_eq!(Material::parse("7e10, 0.33, 2700").unwrap(), Material::aluminium());
+    for bad in ["wood", "1,2", "0,0.3,1000", "1e9,0.5,1000", "1e9,0.3,-1", "a,b,c"] {
+        assert!(Material::parse(bad).is_err(), "{bad}");
+    }
+    let none = model_cards(&DeckOptions { analysis: Analysis::None, ..Default::default() }, 2, "h").unwrap();
+    assert!(!none.contains("*CONTROL"));
+    let st = model_cards(&DeckOptions { analysis: Analysis::Static, ..Default::default() }, 2, "h").unwrap();
+    assert!(st.contains("*CONTROL_IMPLICIT_GENERAL") && !st.contains("EIGENVALUE"));
+    assert!(Units::parse("inch").is_err() && Analysis::parse("explicit").is_err());
 }

@@ -1,11 +1,13 @@
 //! `sddpm batch DIR -o OUT [-j N]`: the main job on every mesh file of a folder, with
 //! all cores (one pipeline per file, files in parallel), each into OUT/<file stem>/,
-//! and a summary table (summary.md, summary.json) in OUT.
+//! and a summary (summary.md, summary.json) in OUT: every part's status, figures
+//! and output files with their sizes.
 
 use super::common::{load_checked, write_json, Loaded};
 use super::polycube::load_model;
 use sddpm::error::{Error, NoProgress};
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
+use sddpm::export::spline_files::OutputOptions;
 use sddpm::pipeline::{run as run_job, ContextRequest, RunOptions};
 use sddpm::Result;
 use rayon::prelude::*;
@@ -44,6 +46,8 @@ pub struct BatchArgs {
     pub force: bool,
     #[command(flatten)]
     pub spline_files: super::run::SplineFileArgs,
+    #[command(flatten)]
+    pub deck: super::run::DeckArgs,
     /// Print the summary as one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -52,20 +56,22 @@ pub struct BatchArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub hex: super::run::HexArgs,
+    #[command(flatten)]
+    pub hex_dev: super::run::HexDevArgs,
 }
 
-fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions, command: &str) -> Result<Value> {
+fn one(model: &sddpm::diffusion::Model, file: &Path, out: &Path, opts: &RunOptions, files: &OutputOptions, command: &str) -> Result<Value> {
     let t0 = std::time::Instant::now();
     let Loaded { mesh, report, path } = load_checked(file, sddpm::mesh::DEFAULT_WELD_TOLERANCE)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let r = run_job(model, &mesh, genus, &ContextRequest::Auto, opts, &mut NoProgress)?;
-    write_run_folder(out, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(command) }, &r, t0.elapsed().as_secs_f64())
+    write_run_folder(out, &InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(command) }, &r, files, t0.elapsed().as_secs_f64())
 }
 
 pub fn run(a: &BatchArgs) -> Result<i32> {
     let t0 = std::time::Instant::now();
     let mut opts = RunOptions::default();
-    super::run::hex_options(&a.hex, &mut opts.hex)?;
+    super::run::hex_options(&a.hex, &a.hex_dev, &mut opts.hex)?;
     let mut files: Vec<PathBuf> = std::fs::read_dir(&a.dir)
         .map_err(|e| Error::io(a.dir.display(), e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -87,6 +93,7 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
         opts.spline = None;
     }
     super::run::spline_file_options(&a.spline_files, &mut opts)?;
+    let outputs = super::run::output_options(&a.spline_files, &a.deck)?;
     opts.validate()?;
     super::common::prepare_output(&a.output, a.force)?;
     if a.force {
@@ -109,7 +116,7 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
             .map(|f| {
                 let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_string();
                 let t = std::time::Instant::now();
-                let r = one(&model, f, &a.output.join(&stem), &opts, &command);
+                let r = one(&model, f, &a.output.join(&stem), &opts, &outputs, &command);
                 let secs = t.elapsed().as_secs_f64();
                 let row = match &r {
                     Ok(j) => json!({
@@ -119,8 +126,9 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
                         "elements": j["hex"]["elements"], "min_scaled_jacobian": j["hex"]["min_scaled_jacobian"],
                         "inverted": j["hex"]["inverted"], "hausdorff_relative": j["hex"]["hausdorff_relative"],
                         "basis_functions": j["spline"]["basis_functions"], "seconds": secs,
+                        "files": part_files(&j), "files_bytes": j["files_bytes"],
                     }),
-                    Err(e) => json!({ "file": f.display().to_string(), "folder": stem, "status": e.status().name(), "error": e.to_string(), "seconds": secs }),
+                    Err(e) => json!({ "file": f.display().to_string(), "folder": stem, "status": e.status().name(), "error": e.to_string(), "seconds": secs, "files": [], "files_bytes": 0 }),
                 };
                 if !a.quiet {
                     eprintln!("{:<28} {:<20} {:.1} s", stem, row["status"].as_str().unwrap_or("?"), secs);
@@ -130,25 +138,10 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
             .collect()
     });
     let ok = rows.iter().filter(|r| r["status"] == "OK").count();
-    let summary = json!({ "files": rows.len(), "ok": ok, "seconds": t0.elapsed().as_secs_f64(), "runs": rows });
+    let total: u64 = rows.iter().filter_map(|r| r["files_bytes"].as_u64()).sum();
+    let summary = json!({ "files": rows.len(), "ok": ok, "seconds": t0.elapsed().as_secs_f64(), "bytes": total, "runs": rows });
     write_json(&a.output.join("summary.json"), &summary)?;
-    let mut md = String::from("| file | status | genus | polycube | verified | elements | min SJ | inverted | Hausdorff | basis functions | s |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
-    let f = |v: &Value| match v {
-        Value::Number(n) if n.is_f64() => format!("{:.4}", n.as_f64().unwrap()),
-        Value::Null => "-".into(),
-        Value::String(s) => s.clone(),
-        o => o.to_string(),
-    };
-    for r in &rows {
-        md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |\n",
-            f(&r["folder"]), f(&r["status"]), f(&r["genus"]), f(&r["polycube"]), f(&r["verified"]), f(&r["elements"]),
-            f(&r["min_scaled_jacobian"]), f(&r["inverted"]), f(&r["hausdorff_relative"]), f(&r["basis_functions"]), r["seconds"].as_f64().unwrap_or(0.0)
-        ));
-    }
-    for r in rows.iter().filter(|r| r["status"] != "OK") {
-        md.push_str(&format!("\n- {}: {}\n", f(&r["folder"]), f(&r["error"])));
-    }
+    let md = summary_md(&rows, total);
     std::fs::write(a.output.join("summary.md"), &md).map_err(|e| Error::io(a.output.join("summary.md").display(), e))?;
     if a.json {
         println!("{summary}");
@@ -156,4 +149,46 @@ pub fn run(a: &BatchArgs) -> Result<i32> {
         eprintln!("{ok} of {} files meshed in {:.1} s; summary in {}", rows.len(), t0.elapsed().as_secs_f64(), a.output.join("summary.md").display());
     }
     Ok(if ok == rows.len() { 0 } else { super::EXIT_BAD_INPUT })
+}
+
+/// A part's files (report.json "files": name and bytes), paths relative to the
+/// batch's output folder.
+fn part_files(j: &Value) -> Value {
+    Value::Array(j["files"].as_array().into_iter().flatten().map(|f| json!({ "name": f["name"], "bytes": f["bytes"] })).collect())
+}
+
+/// summary.md: one row per part, the failures with their errors, and every part's
+/// files with their sizes.
+fn summary_md(rows: &[Value], total: u64) -> String {
+    let mut md = String::from("| file | status | genus | polycube | verified | elements | min SJ | inverted | Hausdorff | basis functions | files | MB | s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let f = |v: &Value| match v {
+        Value::Number(n) if n.is_f64() => format!("{:.4}", n.as_f64().unwrap_or(f64::NAN)),
+        Value::Null => "-".into(),
+        Value::String(s) => s.clone(),
+        o => o.to_string(),
+    };
+    for r in rows {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.1} |\n",
+            f(&r["folder"]), f(&r["status"]), f(&r["genus"]), f(&r["polycube"]), f(&r["verified"]), f(&r["elements"]),
+            f(&r["min_scaled_jacobian"]), f(&r["inverted"]), f(&r["hausdorff_relative"]), f(&r["basis_functions"]),
+            r["files"].as_array().map_or(0, |v| v.len()), r["files_bytes"].as_u64().unwrap_or(0) as f64 / 1e6, r["seconds"].as_f64().unwrap_or(0.0)
+        ));
+    }
+    md.push_str(&format!("\nAll parts: {:.2} MB.\n", total as f64 / 1e6));
+    for r in rows.iter().filter(|r| r["status"] != "OK") {
+        md.push_str(&format!("\n- {}: {}\n", f(&r["folder"]), f(&r["error"])));
+    }
+    md.push_str("\n## Files of each part\n");
+    for r in rows {
+        md.push_str(&format!("\n### {} ({})\n\n", f(&r["folder"]), f(&r["status"])));
+        let files = r["files"].as_array().cloned().unwrap_or_default();
+        if files.is_empty() {
+            md.push_str("no file written\n");
+        }
+        for x in files {
+            md.push_str(&format!("- [{0}/{1}]({0}/{1}) {2} bytes\n", f(&r["folder"]), f(&x["name"]), f(&x["bytes"])));
+        }
+    }
+    md
 }

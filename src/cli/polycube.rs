@@ -21,67 +21,73 @@ pub struct PolycubeArgs {
     pub output: PathBuf,
     /// Weld tolerance relative to the bounding-box diagonal (negative: no welding;
     /// lower it for parts thinner than 1e-9 of their size).
-    #[arg(long, default_value_t = sddpm::mesh::DEFAULT_WELD_TOLERANCE, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = sddpm::mesh::DEFAULT_WELD_TOLERANCE, allow_negative_numbers = true, help_heading = "Input and output")]
     pub weld_tolerance: f64,
     /// A complete context: 12 labels in cell-index order (repeat for a stack).
-    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["constraints", "auto"])]
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["constraints", "auto"], help_heading = "Polycube")]
     pub labels: Vec<String>,
     /// Partial constraints (JSON: {"cube": n, "thc": n, "bhc": n, "labels": {...}, "allowed": [...], "required": [...]}).
-    #[arg(long, conflicts_with = "auto")]
+    #[arg(long, conflicts_with = "auto", help_heading = "Polycube")]
     pub constraints: Option<PathBuf>,
     /// Automated context generation (the default when no context is given).
-    #[arg(long)]
+    #[arg(long, help_heading = "Polycube")]
     pub auto: bool,
     /// Splitting ratios X1,X2,X3:Y1,Y2:Z1,Z2 for the automated mode.
-    #[arg(long)]
+    #[arg(long, help_heading = "Polycube")]
     pub ratios: Option<String>,
     /// Seed of sampling and diffusion.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, help_heading = "Polycube")]
     pub seed: u64,
+    /// Print the report as one JSON object on stdout.
+    #[arg(long, help_heading = "Input and output")]
+    pub json: bool,
+    /// No progress on stderr.
+    #[arg(short, long, help_heading = "Input and output")]
+    pub quiet: bool,
+}
+
+/// The generator's and the sampler's knobs (`--help`'s "Developer" heading),
+/// shared by `sddpm polycube` and `sddpm run`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct GeneratorArgs {
     /// Reverse-diffusion steps (0 = the full T-step sampler; default: the library's default).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub steps: Option<usize>,
     /// Reverse diffusion starts at this step from the forward-noised input (0 = T; default: the library's default).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub start_step: Option<usize>,
     /// Start the reverse process at this noise level in cell units instead of a
     /// fixed step (SamplerOptions::start_noise).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub start_noise: Option<f64>,
     /// Classifier-free guidance weight (0 = off; default: the library's default).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub guidance: Option<f64>,
     /// Gate of the template attention (SamplerOptions::kernel_gate; 1 = its estimate alone, 0 = the U-Net alone, negative = the gate the weights learned; default: the library's default, 1).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help_heading = "Developer")]
     pub kernel_gate: Option<f64>,
     /// The template attention's prior and TCV's coverage without the template faces a
     /// cell shares with an occupied neighbour (SamplerOptions::visible_prior and
     /// VerifyOptions::visible_coverage): more true contexts pass in the user-guided
     /// mode, the automated search ranks worse (BENCHMARKS.md, "The visible prior";
     /// measured with --start-step 100).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub visible: bool,
     /// Do not diffuse a candidate that fails verification a second time with the
     /// visible prior (PolycubeOptions::visible_retry, on by default).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub no_visible_retry: bool,
     /// The generator: "learned" (the embedded point denoiser, or --weights) or
     /// "template" (the closed-form template estimate, the baseline; no weights).
-    #[arg(long, default_value = "learned")]
+    #[arg(long, default_value = "learned", help_heading = "Developer")]
     pub generator: String,
     /// The sampler: "strided" (the generator's default) or "paper" (the paper's
     /// reverse process from the input itself at T, all T ancestral steps).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub sampler: Option<String>,
     /// Model weights for the learned generator (default: the embedded model).
-    #[arg(long)]
+    #[arg(long, help_heading = "Developer")]
     pub weights: Option<PathBuf>,
-    /// Print the report as one JSON object on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// No progress on stderr.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 /// `sddpm polycube`'s arguments: the polycube options and `--force`.
@@ -92,8 +98,10 @@ pub struct PolycubeCommandArgs {
     /// Write an output folder that is not empty: first remove the files sddpm writes
     /// (report.json, polycube.obj, candidates.json, ...; other files are kept).
     /// Without it a non-empty folder is refused.
-    #[arg(long)]
+    #[arg(long, help_heading = "Input and output")]
     pub force: bool,
+    #[command(flatten)]
+    pub generator: GeneratorArgs,
 }
 
 pub fn request_of(a: &PolycubeArgs) -> Result<ContextRequest> {
@@ -117,7 +125,7 @@ pub fn kernel_gate_arg(g: f64) -> Option<f64> {
     if g < 0.0 { None } else { Some(g) }
 }
 
-pub fn options_of(a: &PolycubeArgs) -> Result<PolycubeOptions> {
+pub fn options_of(p: &PolycubeArgs, a: &GeneratorArgs) -> Result<PolycubeOptions> {
     let mut o = match a.generator.as_str() {
         "template" => PolycubeOptions::template(),
         _ => PolycubeOptions::default(),
@@ -127,8 +135,8 @@ pub fn options_of(a: &PolycubeArgs) -> Result<PolycubeOptions> {
         Some("paper") => o.sampler = SamplerOptions { kernel_gate: o.sampler.kernel_gate, ..SamplerOptions::paper() },
         Some(other) => return Err(Error::InvalidArgument(format!("--sampler must be strided or paper, got {other:?}"))),
     }
-    o.seed = a.seed;
-    o.sampler.seed = a.seed;
+    o.seed = p.seed;
+    o.sampler.seed = p.seed;
     if let Some(s) = a.steps {
         o.sampler.steps = s;
     }
@@ -162,7 +170,7 @@ pub fn load_model(weights: &Option<PathBuf>) -> Result<Model> {
 }
 
 /// The model `--generator` and `--weights` name.
-pub fn load_generator(a: &PolycubeArgs) -> Result<Model> {
+pub fn load_generator(a: &GeneratorArgs) -> Result<Model> {
     match a.generator.as_str() {
         "learned" => load_model(&a.weights),
         "template" if a.weights.is_none() => Ok(Model::template()),
@@ -177,8 +185,8 @@ pub fn run(c: &PolycubeCommandArgs) -> Result<i32> {
     let Loaded { mesh, report: mrep, path } = load_checked(&a.mesh, a.weld_tolerance)?;
     let genus = mrep.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(a)?;
-    let model = load_generator(a)?;
-    let opts = options_of(a)?;
+    let model = load_generator(&c.generator)?;
+    let opts = options_of(a, &c.generator)?;
     // every option is checked before the folder is touched
     sddpm::pipeline::RunOptions { polycube: opts.clone(), ..Default::default() }.validate()?;
     super::common::prepare_output(&a.output, c.force)?;

@@ -1,8 +1,11 @@
-//! `sddpm run MESH -o DIR [polycube options] [--level N] [--no-spline] [fallback options] [quality goals]`: the main job.
+//! `sddpm run MESH -o DIR [polycube options] [--size H | --level N] [--no-spline] [fallback options] [quality goals] [file and deck options]`: the main job.
+//! `sddpm run --help` groups the options under headings; the developer knobs come last ("Developer").
 
 use super::common::{load_checked, Loaded};
-use super::polycube::{load_generator, options_of, request_of, PolycubeArgs};
+use super::polycube::{load_generator, options_of, request_of, GeneratorArgs, PolycubeArgs};
 use sddpm::error::{Error, Progress};
+use sddpm::export::lsdyna::{Analysis, DeckOptions, Material, Units};
+use sddpm::export::spline_files::{OutputOptions, MAX_SAMPLES};
 use sddpm::hex::{HexOption, HexOptions};
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, RunOptions, RunResult};
@@ -12,35 +15,73 @@ use sddpm::Result;
 pub struct RunArgs {
     #[command(flatten)]
     pub polycube: PolycubeArgs,
-    /// Stop after the hex mesh (no spline.bext / model.k).
-    #[arg(long)]
-    pub no_spline: bool,
     /// Write an output folder that is not empty: first remove the files sddpm writes
     /// (report.json, hex.*, spline.*, ...; other files are kept). Without it a
     /// non-empty folder is refused.
-    #[arg(long)]
+    #[arg(long, help_heading = "Input and output")]
     pub force: bool,
-    #[command(flatten)]
-    pub spline_files: SplineFileArgs,
     /// Refuse (exit 2) when no candidate passes verification instead of meshing the
     /// best-fitting unverified one, and when the hex mesh keeps inverted elements.
-    #[arg(long)]
+    #[arg(long, help_heading = "Mesh size and quality goals")]
     pub strict: bool,
-    /// How many candidates are meshed (verified ones, else unverified ones by fit); the best mesh is kept (default 4).
-    #[arg(long)]
-    pub hex_candidates: Option<usize>,
     #[command(flatten)]
     pub hex: HexArgs,
+    /// Stop after the hex mesh (no spline.bext / model.k / spline.vtu).
+    #[arg(long, help_heading = "Spline and files")]
+    pub no_spline: bool,
+    #[command(flatten)]
+    pub spline_files: SplineFileArgs,
+    #[command(flatten)]
+    pub deck: DeckArgs,
+    /// How many candidates are meshed (verified ones, else unverified ones by fit); the best mesh is kept (default 4).
+    #[arg(long, help_heading = "Developer")]
+    pub hex_candidates: Option<usize>,
+    #[command(flatten)]
+    pub hex_dev: HexDevArgs,
+    #[command(flatten)]
+    pub generator: GeneratorArgs,
+}
+
+/// The LS-DYNA decks' part, material and analysis (hex.k and model.k), shared by
+/// `sddpm run` and `sddpm batch`.
+#[derive(clap::Args, Debug)]
+pub struct DeckArgs {
+    /// Unit system of the decks: mm-t-s (MPa, t/mm^3), m-kg-s (Pa, kg/m^3) or mm-kg-ms (GPa, kg/mm^3); the mesh's coordinates are taken in its length unit (default mm-t-s).
+    #[arg(long, value_name = "U", default_value = "mm-t-s", help_heading = "LS-DYNA decks")]
+    pub units: String,
+    /// Material of *MAT_ELASTIC: steel (210 GPa, 0.3, 7850 kg/m^3), aluminium (70 GPa, 0.33, 2700 kg/m^3) or E,nu,rho in SI units (Pa, -, kg/m^3), scaled into --units (default steel).
+    #[arg(long, value_name = "M", default_value = "steel", help_heading = "LS-DYNA decks")]
+    pub material: String,
+    /// Analysis of the decks: none (the model alone, to include in another deck), modal (10 free-free eigenmodes) or static (one implicit step; add loads and constraints) (default modal).
+    #[arg(long, value_name = "A", default_value = "modal", help_heading = "LS-DYNA decks")]
+    pub analysis: String,
+}
+
+/// The spline files' and the decks' options of the arguments.
+pub fn output_options(s: &SplineFileArgs, d: &DeckArgs) -> Result<OutputOptions> {
+    let units = Units::parse(&d.units)?;
+    let material = Material::parse(&d.material).map_err(|e| Error::InvalidArgument(format!("--material: {e}")))?;
+    let deck = DeckOptions { analysis: Analysis::parse(&d.analysis)?, ..DeckOptions::default() }.with_material(material, units)?;
+    let mut o = OutputOptions { deck, ..OutputOptions::default() };
+    match s.spline_sample {
+        0 => o.vtu = None,
+        n if n <= MAX_SAMPLES => o.vtk_samples = n,
+        n => return Err(Error::InvalidArgument(format!("--spline-sample must be 0 to {MAX_SAMPLES}, got {n}"))),
+    }
+    Ok(o)
 }
 
 /// How spline.bext is written, shared by `sddpm run` and `sddpm batch`.
 #[derive(clap::Args, Debug)]
 pub struct SplineFileArgs {
+    /// spline.vtu, the spline sampled for ParaView: N sub-cells along each element edge (N^3 cells and (N+1)^3 points per element; 0 to 8, 0: no spline.vtu), lowered where the file would pass 500,000 cells (default 2).
+    #[arg(long, value_name = "N", default_value_t = sddpm::export::spline_files::DEFAULT_SAMPLES, help_heading = "Spline and files")]
+    pub spline_sample: usize,
     /// Dense BEXT operator rows (64 entries each, as Hex2Spline writes them) instead of the default sparse rows.
-    #[arg(long)]
+    #[arg(long, help_heading = "Spline and files")]
     pub dense_bext: bool,
     /// Absolute tolerance of the BEXT operator entries: each is written with the fewest decimals that read back within it (default 1e-8; 0: exact).
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", help_heading = "Spline and files")]
     pub bext_tolerance: Option<f64>,
 }
 
@@ -62,67 +103,77 @@ pub fn spline_file_options(a: &SplineFileArgs, opts: &mut RunOptions) -> Result<
     Ok(())
 }
 
+/// The hex stage's developer knobs (`--help`'s "Developer" heading), shared by
+/// `sddpm run` and `sddpm batch`.
+#[derive(clap::Args, Debug)]
+pub struct HexDevArgs {
+    /// No sharp-edge capture (by default boundary nodes near the input's sharp edges go onto them; docs/hex.md).
+    #[arg(long, help_heading = "Developer")]
+    pub no_capture_features: bool,
+    /// No feature sheets (by default the fallback's lattice meshes get a sheet of elements under each surface patch so that their boundary follows the sharp curves; docs/hex.md).
+    #[arg(long, help_heading = "Developer")]
+    pub no_feature_sheets: bool,
+    /// Feature curves whose median dihedral angle is below DEG degrees are ignored (default 60: creases of CAD parts, not facets of a coarse tessellation; e.g. 40 to follow 45-degree chamfers; docs/hex.md "Surface map").
+    #[arg(long, value_name = "DEG", help_heading = "Developer")]
+    pub feature_median_angle: Option<f64>,
+}
+
 /// The hex stage's options, shared by `sddpm run` and `sddpm batch`.
 #[derive(clap::Args, Debug)]
 pub struct HexArgs {
+    /// Target element size H in model units: the polycube mesh's level is the one whose element count is nearest the input's volume / H^3, the fallback's lattice has voxels of edge H with no finer lattice; replaces --level and --voxel-resolution (report.json "hex.mean_edge_length" gives the result).
+    #[arg(long, value_name = "H", help_heading = "Mesh size and quality goals", conflicts_with_all = ["level", "voxel_resolution"])]
+    pub size: Option<f64>,
     /// Fix the octree subdivision level (default: chosen by the stopping rule).
-    #[arg(long)]
+    #[arg(long, help_heading = "Mesh size and quality goals")]
     pub level: Option<u32>,
     /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
-    #[arg(long)]
+    #[arg(long, help_heading = "Grid-based fallback")]
     pub voxel_resolution: Option<usize>,
     /// How many finer lattices the fallback may try after the first (default 2; 0: that lattice only).
-    #[arg(long)]
+    #[arg(long, help_heading = "Grid-based fallback")]
     pub voxel_refinements: Option<usize>,
-    /// No sharp-edge capture (by default boundary nodes near the input's sharp edges go onto them; docs/hex.md).
-    #[arg(long)]
-    pub no_capture_features: bool,
-    /// No feature sheets (by default the fallback's lattice meshes get a sheet of elements under each surface patch so that their boundary follows the sharp curves; docs/hex.md).
-    #[arg(long)]
-    pub no_feature_sheets: bool,
-    /// Feature curves whose median dihedral angle is below DEG degrees are ignored (default 60: creases of CAD parts, not facets of a coarse tessellation; e.g. 40 to follow 45-degree chamfers; docs/hex.md "Surface map").
-    #[arg(long, value_name = "DEG")]
-    pub feature_median_angle: Option<f64>,
     /// The fallback's kept lattice is meshed again with its planes on the input's axis-parallel planar faces of at least F of its area, and kept when it ranks better (default 0.02; 0: off; docs/hex.md "Lattice planes on the faces").
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", help_heading = "Grid-based fallback")]
     pub lattice_planes: Option<f64>,
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", help_heading = "Grid-based fallback")]
     pub pin_uncovered: Option<f64>,
     /// Local refinement: up to N rounds that split the fallback's voxels around the points farthest from its mesh 3 x 3 x 3, with conforming transition elements (off by default; docs/hex.md).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", help_heading = "Grid-based fallback")]
     pub local_refinement: Option<usize>,
     /// Quality goal: smallest acceptable minimum scaled Jacobian, in (-1, 1] (default 0.3). Meshes are ranked by the goals they miss; the fallback refines its lattice while the best misses one.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", help_heading = "Mesh size and quality goals")]
     pub goal_min_sj: Option<f64>,
     /// Quality goal: smallest acceptable mean scaled Jacobian, in (-1, 1] (default 0.85).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", help_heading = "Mesh size and quality goals")]
     pub goal_mean_sj: Option<f64>,
     /// Quality goal: largest acceptable two-sided Hausdorff distance between the mesh boundary and the input, relative to the bounding-box diagonal, > 0 (default 0.01; e.g. 0.02 for a coarser control mesh).
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", help_heading = "Mesh size and quality goals")]
     pub goal_hausdorff: Option<f64>,
     /// Most elements a mesh may have before pillowing: caps the automatic octree level (not below its minimum, 2) and the fallback's lattices (default 200000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", help_heading = "Mesh size and quality goals")]
     pub max_elements: Option<usize>,
 }
 
 /// The hex-stage options of the arguments on top of `hex`, checked by
 /// [`HexOptions::validate`] (an out-of-range value is an error naming its flag).
-pub fn hex_options(a: &HexArgs, hex: &mut HexOptions) -> Result<()> {
+pub fn hex_options(a: &HexArgs, d: &HexDevArgs, hex: &mut HexOptions) -> Result<()> {
     hex.map.level = a.level;
+    hex.target_size = a.size;
     if let Some(n) = a.voxel_resolution {
         hex.fallback.resolution = n;
     }
     if let Some(n) = a.voxel_refinements {
         hex.fallback.refinements = n;
     }
-    hex.quality.capture_features = !a.no_capture_features;
-    hex.quality.feature_sheets = !a.no_feature_sheets;
+    hex.quality.capture_features = !d.no_capture_features;
+    hex.quality.feature_sheets = !d.no_feature_sheets;
     if let Some(n) = a.local_refinement {
         hex.fallback.local_refinement = n;
     }
-    if let Some(d) = a.feature_median_angle {
-        hex.surface.feature_median_angle = d;
+    if let Some(deg) = d.feature_median_angle {
+        hex.surface.feature_median_angle = deg;
     }
     if let Some(f) = a.lattice_planes {
         hex.fallback.lattice_planes = f;
@@ -158,6 +209,7 @@ fn flag(o: HexOption) -> &'static str {
         HexOption::GoalMeanScaledJacobian => "--goal-mean-sj",
         HexOption::GoalHausdorff => "--goal-hausdorff",
         HexOption::MaxElements => "--max-elements",
+        HexOption::TargetSize => "--size",
         other => other.path(),
     }
 }
@@ -177,16 +229,17 @@ pub fn run_folder(a: &RunArgs, progress: &mut dyn Progress, command: &str) -> Re
     let t0 = std::time::Instant::now();
     let p = &a.polycube;
     let mut opts = RunOptions::default();
-    hex_options(&a.hex, &mut opts.hex)?;
+    hex_options(&a.hex, &a.hex_dev, &mut opts.hex)?;
     let Loaded { mesh, report, path } = load_checked(&p.mesh, p.weld_tolerance)?;
     let genus = report.genus.ok_or_else(|| Error::InvalidMesh("the genus of the input is undefined".into()))?;
     let request = request_of(p)?;
-    let model = load_generator(p)?;
-    opts.polycube = options_of(p)?;
+    let model = load_generator(&a.generator)?;
+    opts.polycube = options_of(p, &a.generator)?;
     if a.no_spline {
         opts.spline = None;
     }
     spline_file_options(&a.spline_files, &mut opts)?;
+    let files = output_options(&a.spline_files, &a.deck)?;
     opts.validate()?;
     super::common::prepare_output(&p.output, a.force)?;
     opts.accept_unverified = !a.strict;
@@ -196,7 +249,7 @@ pub fn run_folder(a: &RunArgs, progress: &mut dyn Progress, command: &str) -> Re
     }
     let r = run_job(&model, &mesh, genus, &request, &opts, progress)?;
     let input = InputInfo { path: &path, mesh: &mesh, report: &report, command: Some(command) };
-    let j = write_run_folder(&p.output, &input, &r, t0.elapsed().as_secs_f64())?;
+    let j = write_run_folder(&p.output, &input, &r, &files, t0.elapsed().as_secs_f64())?;
     Ok(RunDone { report: j, result: r, seconds: t0.elapsed().as_secs_f64() })
 }
 
@@ -231,7 +284,7 @@ pub fn run(a: &RunArgs) -> Result<i32> {
     } else if !p.quiet {
         let h = &j["hex"];
         eprintln!(
-            "polycube {} ({} of {} candidates verified); hex ({}): {} elements, min scaled Jacobian {:.3}, mean {:.3}, {} inverted, Hausdorff {:.2} % of the diagonal; {}wrote {} in {:.1} s",
+            "polycube {} ({} of {} candidates verified); hex ({}): {} elements, min scaled Jacobian {:.3}, mean {:.3}, {} inverted, Hausdorff {:.2} % of the diagonal; {}wrote {} ({} files, {:.1} MB) in {:.1} s",
             j["polycube"]["description"].as_str().unwrap_or("none"),
             j["polycube"]["verified"],
             j["polycube"]["candidates"],
@@ -243,6 +296,8 @@ pub fn run(a: &RunArgs) -> Result<i32> {
             100.0 * r.hex.hausdorff_relative,
             if j["spline"].is_null() { String::new() } else { format!("spline: {} basis functions; ", j["spline"]["basis_functions"]) },
             p.output.display(),
+            j["files"].as_array().map_or(0, |f| f.len()),
+            j["files_bytes"].as_u64().unwrap_or(0) as f64 / 1e6,
             seconds
         );
     }

@@ -1,12 +1,14 @@
 //! Hex-mesh files besides legacy VTK: VTU (VTK XML unstructured grid, ASCII, with
 //! per-cell scalars), Medit .mesh (HexaLab, gmsh) and the LS-DYNA keyword format
-//! (*NODE, *ELEMENT_SOLID). Every writer has a reader so that tests can parse the
+//! (*NODE, *ELEMENT_SOLID with the part, section, material and analysis cards of a
+//! deck that runs alone). Every writer has a reader so that tests can parse the
 //! files back. All keep the VTK_HEXAHEDRON node order (bottom face 0-3
 //! counter-clockwise seen from the top face, top face 4-7 above it), which is also
 //! LS-DYNA's positive-volume order for 8-node solids; Medit and LS-DYNA ids are 1-based.
 //! [`write_hex_files`] writes the hex stage's files of a run folder.
 
 use crate::error::{Error, Result};
+use super::lsdyna::{model_cards, DeckOptions};
 use super::vtk::write_vtk_legacy;
 use crate::hex::report::{HEX_K, HEX_MESH, HEX_VTK, HEX_VTU};
 use crate::hex::{HexMesh, HexResult};
@@ -273,9 +275,24 @@ fn e16(x: f64) -> String {
     format!("{s:>16}")
 }
 
-/// LS-DYNA keyword deck of the mesh: *NODE (I8, 3 x E16) and *ELEMENT_SOLID (10 x I8),
-/// part `pid`, 1-based ids.
+/// LS-DYNA keyword deck of the mesh that runs alone ([`to_lsdyna_deck`]) with the
+/// default deck options (steel in mm-t-s, modal analysis), part `pid`.
 pub fn to_lsdyna(m: &HexMesh, title: &str, pid: u32) -> String {
+    let o = DeckOptions { part_id: pid, ..DeckOptions::default() };
+    // the default material and analysis are valid: the cards cannot fail
+    to_lsdyna_deck(m, title, &o).unwrap_or_default()
+}
+
+/// Element formulation of hex.k's *SECTION_SOLID: 2, the fully integrated
+/// selectively reduced hexahedron (no hourglass modes; usable in implicit runs).
+pub const HEX_ELFORM: i64 = 2;
+
+/// LS-DYNA keyword deck of the mesh: *KEYWORD, *TITLE, *NODE (I8, 3 x E16),
+/// *ELEMENT_SOLID (10 x I8, part `o.part_id`, 1-based ids), then *PART,
+/// *SECTION_SOLID ([`HEX_ELFORM`]), *MAT_ELASTIC and the analysis's control cards
+/// ([`crate::export::lsdyna::model_cards`]), *END.
+pub fn to_lsdyna_deck(m: &HexMesh, title: &str, o: &DeckOptions) -> Result<String> {
+    let pid = o.part_id;
     let mut s = String::with_capacity(64 * (m.nodes.len() + m.elements.len()));
     s.push_str("*KEYWORD\n*TITLE\n");
     let t: String = title.chars().filter(|c| *c != '\n').take(80).collect();
@@ -292,12 +309,14 @@ pub fn to_lsdyna(m: &HexMesh, title: &str, pid: u32) -> String {
         }
         s.push('\n');
     }
+    s.push_str(&model_cards(o, HEX_ELFORM, "hex mesh")?);
     s.push_str("*END\n");
-    s
+    Ok(s)
 }
 
+/// Write the mesh as a deck with the default deck options ([`to_lsdyna`]).
 pub fn write_lsdyna(path: &Path, m: &HexMesh, title: &str) -> Result<()> {
-    write_text(path, to_lsdyna(m, title, 1))
+    write_text(path, to_lsdyna_deck(m, title, &DeckOptions::default())?)
 }
 
 pub fn read_lsdyna(path: &Path) -> Result<HexMesh> {
@@ -429,11 +448,12 @@ mod tests {
 
 /// Write hex.vtu, hex.vtk (both with the cell data "scaled_jacobian"), hex.mesh and
 /// hex.k (the names of [`crate::hex::report`]) into `dir` (which must exist), all in user coordinates.
-pub fn write_hex_files(dir: &Path, r: &HexResult) -> Result<()> {
+/// `deck`: the part, material and analysis of hex.k.
+pub fn write_hex_files(dir: &Path, r: &HexResult, deck: &DeckOptions) -> Result<()> {
     let sj: &[f64] = &r.scaled_jacobian;
     write_vtu(&dir.join(HEX_VTU), &r.mesh, &[("scaled_jacobian", sj)])?;
     write_vtk_legacy(&dir.join(HEX_VTK), &r.mesh, "sddpm hex mesh", &[("scaled_jacobian", sj)])?;
     write_medit(&dir.join(HEX_MESH), &r.mesh)?;
-    write_lsdyna(&dir.join(HEX_K), &r.mesh, "sddpm hex mesh")?;
+    write_text(&dir.join(HEX_K), to_lsdyna_deck(&r.mesh, "sddpm hex mesh", deck)?)?;
     Ok(())
 }

@@ -7,6 +7,7 @@ pub mod bext;
 pub mod hexfmt;
 pub mod lsdyna;
 pub mod spline_vtk;
+pub mod spline_vtu;
 pub mod spline_files;
 pub mod plot;
 pub mod render;

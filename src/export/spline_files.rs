@@ -1,9 +1,9 @@
 //! The spline stage's files of a run folder: the BEXT file, the LS-DYNA deck that
-//! includes it and the optional VTK files ([`write_outputs`]), with the `spline`
+//! includes it, the spline sampled per element (VTU) and the control mesh ([`write_outputs`]), with the `spline`
 //! object of report.json.
 
 use super::lsdyna::DeckOptions;
-use super::{bext, lsdyna, spline_vtk};
+use super::{bext, lsdyna, spline_vtk, spline_vtu};
 use crate::error::{Error, Result};
 use crate::spline::Spline;
 use serde::Serialize;
@@ -15,20 +15,21 @@ pub struct OutputOptions {
     pub bext: String,
     /// LS-DYNA deck including it (default "model.k").
     pub lsdyna: String,
-    /// Sampled spline for ParaView (default Some("spline.vtk"); None skips it).
+    /// The spline sampled per element as binary VTU ([`spline_vtu`]; default
+    /// Some("spline.vtu"); None skips it).
+    pub vtu: Option<String>,
+    /// The same samples as binary legacy VTK (default None: the VTU holds the same
+    /// grid and data; legacy readers only).
     pub vtk: Option<String>,
     /// Control mesh (default Some("spline_control.vtk")).
     pub control_vtk: Option<String>,
-    /// Sub-cells per direction and element in the sampled VTK (default 2: 27
-    /// points per element, enough to show each element's curvature; 4 wrote 42 MB
-    /// of ASCII for the 2,560 elements of the torus), lowered (to 1 at least) so
-    /// that the file has at most `vtk_max_cells` cells.
+    /// Sub-cells along each element edge in the sampled files (default
+    /// [`DEFAULT_SAMPLES`], 2: 27 points and 8 cells per element, enough to show each
+    /// element's curvature; 1 to [`MAX_SAMPLES`]), lowered (to 1 at least) so that
+    /// the file has at most `vtk_max_cells` cells.
     pub vtk_samples: usize,
-    /// Binary legacy VTK for the sampled spline (default true: 32-bit values,
-    /// about a fifth of the ASCII size; false: ASCII with full precision).
-    pub vtk_binary: bool,
-    /// Cap on the sampled VTK's cells (default 500,000, about 140 MB: 4 samples on
-    /// the 144,000 elements of a voxel-68 cgal_joint wrote 9.2 M cells, 2.5 GB).
+    /// Cap on the sampled files' cells (default 500,000, about 23 MB of VTU: 4
+    /// samples on the 144,000 elements of a voxel-68 cgal_joint would be 9.2 M cells).
     pub vtk_max_cells: usize,
     /// Sparse BEXT rows (default: `SplineOptions::sparse_bext` of the spline).
     pub sparse_bext: Option<bool>,
@@ -44,10 +45,10 @@ impl Default for OutputOptions {
         OutputOptions {
             bext: "spline.bext".into(),
             lsdyna: "model.k".into(),
-            vtk: Some("spline.vtk".into()),
+            vtu: Some("spline.vtu".into()),
+            vtk: None,
             control_vtk: Some("spline_control.vtk".into()),
-            vtk_samples: 2,
-            vtk_binary: true,
+            vtk_samples: DEFAULT_SAMPLES,
             vtk_max_cells: 500_000,
             sparse_bext: None,
             bext_tolerance: None,
@@ -56,7 +57,12 @@ impl Default for OutputOptions {
     }
 }
 
-/// Samples per direction and element of the sampled VTK: `o.vtk_samples`, fewer
+/// Default [`OutputOptions::vtk_samples`] (`sddpm run --spline-sample`).
+pub const DEFAULT_SAMPLES: usize = 2;
+/// Largest [`OutputOptions::vtk_samples`]: 512 cells per element.
+pub const MAX_SAMPLES: usize = 8;
+
+/// Samples per direction and element of the sampled files: `o.vtk_samples`, fewer
 /// when `elements` x samples^3 would pass `o.vtk_max_cells`, and at least 1.
 fn vtk_samples(o: &OutputOptions, elements: usize) -> usize {
     let mut n = o.vtk_samples.max(1);
@@ -67,7 +73,7 @@ fn vtk_samples(o: &OutputOptions, elements: usize) -> usize {
 }
 
 /// Write the spline's files into `dir` (BEXT, the LS-DYNA deck that includes it,
-/// optional VTK files) and return the `spline` object of report.json: the keys
+/// the sampled spline, the control mesh) and return the `spline` object of report.json: the keys
 /// DESIGN.md fixes ("elements", "basis_functions", "bext", "lsdyna") plus the
 /// whole `SplineReport` and the names of the VTK files.
 pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> Result<serde_json::Value> {
@@ -76,13 +82,15 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
     let tolerance = o.bext_tolerance.unwrap_or(sp.options().bext_tolerance);
     bext::write_bext_within(&dir.join(&o.bext), sp, sparse, tolerance)?;
     lsdyna::write_iga_deck(&dir.join(&o.lsdyna), &o.bext, &o.deck)?;
+    if !(1..=MAX_SAMPLES).contains(&o.vtk_samples) {
+        return Err(Error::InvalidArgument(format!("samples per element edge must be 1..={MAX_SAMPLES}, got {}", o.vtk_samples)));
+    }
+    let n = vtk_samples(o, sp.num_elements());
+    if let Some(v) = &o.vtu {
+        spline_vtu::write_spline_vtu(&dir.join(v), sp, n)?;
+    }
     if let Some(v) = &o.vtk {
-        let n = vtk_samples(o, sp.num_elements());
-        if o.vtk_binary {
-            spline_vtk::write_spline_vtk_binary(&dir.join(v), sp, n)?;
-        } else {
-            spline_vtk::write_spline_vtk(&dir.join(v), sp, n)?;
-        }
+        spline_vtk::write_spline_vtk_binary(&dir.join(v), sp, n)?;
     }
     if let Some(v) = &o.control_vtk {
         spline_vtk::write_control_mesh_vtk(&dir.join(v), sp)?;
@@ -91,7 +99,10 @@ pub fn write_outputs(dir: &std::path::Path, sp: &Spline, o: &OutputOptions) -> R
     if let Some(m) = j.as_object_mut() {
         m.insert("bext".into(), o.bext.clone().into());
         m.insert("lsdyna".into(), o.lsdyna.clone().into());
+        m.insert("vtu".into(), o.vtu.clone().into());
         m.insert("vtk".into(), o.vtk.clone().into());
+        let sampled = o.vtu.is_some() || o.vtk.is_some();
+        m.insert("sample_cells_per_edge".into(), if sampled { n.into() } else { serde_json::Value::Null });
         m.insert("control_vtk".into(), o.control_vtk.clone().into());
         m.insert("bext_sparse".into(), sparse.into());
         m.insert("bext_tolerance".into(), tolerance.into());
@@ -113,7 +124,7 @@ mod tests {
         assert_eq!(vtk_samples(&o, 25_469), 2);
         assert_eq!(vtk_samples(&o, 143_996), 1);
         assert_eq!(vtk_samples(&o, 10_000_000), 1);
-        assert_eq!(vtk_samples(&OutputOptions { vtk_samples: 0, ..o.clone() }, 1), 1);
+        assert_eq!(vtk_samples(&OutputOptions { vtk_samples: 1, ..o.clone() }, 1), 1);
         for e in [1, 100, 7_813, 7_814, 62_500, 62_501] {
             let n = vtk_samples(&o, e);
             assert!(n == 1 || e * n * n * n <= o.vtk_max_cells, "{e}: {n}");

@@ -11,13 +11,13 @@ use std::path::Path;
 
 /// The spline sampled on each element's (s+1)^3 grid: points, Jacobian
 /// determinants and scaled Jacobians, element by element, i fastest.
-struct Samples {
-    pts: Vec<[f64; 3]>,
-    det: Vec<f64>,
-    sj: Vec<f64>,
+pub(crate) struct Samples {
+    pub(crate) pts: Vec<[f64; 3]>,
+    pub(crate) det: Vec<f64>,
+    pub(crate) sj: Vec<f64>,
 }
 
-fn sample(sp: &Spline, s: usize) -> Result<Samples> {
+pub(crate) fn sample(sp: &Spline, s: usize) -> Result<Samples> {
     if s == 0 || s > 32 {
         return Err(Error::InvalidArgument(format!("samples per direction must be 1..=32, got {s}")));
     }
@@ -43,7 +43,7 @@ fn sample(sp: &Spline, s: usize) -> Result<Samples> {
 
 /// The s^3 linear hexahedra of each of `ne` sampled elements, as point ids in
 /// VTK's node order.
-fn sub_cells(ne: usize, s: usize) -> impl Iterator<Item = [usize; 8]> {
+pub(crate) fn sub_cells(ne: usize, s: usize) -> impl Iterator<Item = [usize; 8]> {
     let m = s + 1;
     let id = move |e: usize, i: usize, j: usize, k: usize| e * m * m * m + i + m * (j + m * k);
     (0..ne * s * s * s).map(move |c| {

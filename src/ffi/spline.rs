@@ -138,7 +138,7 @@ pub unsafe extern "C" fn sddpm_spline_evaluate(s: *const SddpmSpline, element: u
     }
 }
 
-/// Write spline.bext, model.k (the LS-DYNA deck including it), spline.vtk and
+/// Write spline.bext, model.k (the LS-DYNA deck including it), spline.vtu and
 /// spline_control.vtk into the folder `dir` (created if missing).
 ///
 /// # Safety

@@ -31,6 +31,15 @@ pub struct HexOptions {
     pub max_elements: usize,
     /// Extra random surface samples for the Hausdorff distance (default 20 000).
     pub hausdorff_samples: usize,
+    /// Target element size in model units (default None: the level by the
+    /// stopping rule, the fallback's lattices by `fallback.resolution`; finite,
+    /// > 0). When set, the main job fixes each polycube mesh's level to the one
+    /// whose element count is nearest the input's volume over size^3, and the
+    /// fallback's first lattice to `longest bounding-box edge / size` voxels with no
+    /// finer lattice after it (`crate::pipeline::size`); a fixed `map.level` or
+    /// the caller's own `fallback.resolution` is replaced.
+    #[serde(default)]
+    pub target_size: Option<f64>,
 }
 
 impl Default for HexOptions {
@@ -43,6 +52,7 @@ impl Default for HexOptions {
             goals: QualityGoals::default(),
             max_elements: 200_000,
             hausdorff_samples: 20_000,
+            target_size: None,
         }
     }
 }
@@ -298,6 +308,7 @@ pub enum HexOption {
     GoalMeanScaledJacobian,
     GoalHausdorff,
     MaxElements,
+    TargetSize,
 }
 
 impl HexOption {
@@ -324,6 +335,7 @@ impl HexOption {
             HexOption::GoalMeanScaledJacobian => "goals.mean_scaled_jacobian",
             HexOption::GoalHausdorff => "goals.hausdorff",
             HexOption::MaxElements => "max_elements",
+            HexOption::TargetSize => "target_size",
         }
     }
 }
@@ -408,6 +420,9 @@ impl HexOptions {
         }
         if self.max_elements == 0 {
             return bad(HexOption::MaxElements, "0".into(), "at least 1");
+        }
+        if let Some(h) = self.target_size.filter(|h| !(h.is_finite() && *h > 0.0)) {
+            return bad(HexOption::TargetSize, h.to_string(), "a finite size > 0 in model units");
         }
         Ok(())
     }

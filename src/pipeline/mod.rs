@@ -6,6 +6,8 @@
 
 pub mod options;
 pub mod report;
+pub mod report_html;
+pub mod size;
 
 use crate::context::{Constraints, Context};
 use crate::diffusion::Model;
@@ -530,7 +532,7 @@ fn build_hex_for_polycube(
         let th = Instant::now();
         let span = if hex_opts.fallback.enabled { FALLBACK_FROM } else { 1.0 };
         let mut sub = SubProgress { inner: progress, lo: span * k as f64 / n as f64, hi: span * (k + 1) as f64 / n as f64 };
-        let r = match build_hex_mesh(&input, hex_opts, &mut sub) {
+        let r = match build_hex_mesh(&input, &size::for_polycube(hex_opts, &cand.context, mesh), &mut sub) {
             Ok(r) => r,
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(e) => {
@@ -555,7 +557,7 @@ fn build_hex_for_polycube(
         let th = Instant::now();
         let mut sub = SubProgress { inner: progress, lo: FALLBACK_FROM, hi: 1.0 };
         let identity = Affine::similarity(1.0, [0.0; 3]);
-        match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, hex_opts, &mut sub) {
+        match crate::hex::build_voxel_hex_mesh(mesh, &identity, pr.input_genus, &size::for_lattice(hex_opts, mesh), &mut sub) {
             Ok(r) => {
                 attempts.push(HexAttempt::of(None, r.domain.to_string(), &r, goals, th));
                 if goals.beats(&r, best.as_ref().map(|(_, b)| b)) {

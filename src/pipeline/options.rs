@@ -154,6 +154,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("hex.goals.mean_scaled_jacobian", Number, false, "Quality goal: smallest acceptable mean scaled Jacobian"),
     opt("hex.goals.hausdorff", Number, false, "Quality goal: largest acceptable two-sided Hausdorff distance to the input, fraction of the bounding-box diagonal"),
     opt("hex.max_elements", Integer, false, "Most elements before pillowing: caps the automatic level and the fallback's lattices"),
+    opt("hex.target_size", Number, true, "Target element size in model units: fixes the polycube level and the fallback's lattice (none: the stopping rule and hex.fallback.resolution)"),
     opt("hex.hausdorff_samples", Integer, false, "Extra random surface samples for the Hausdorff distance"),
     // the spline stage (docs/spline.md)
     opt("spline.sharp_angle_deg", Number, true, "Boundary edges whose quads' normals differ by more than this angle (degrees, 0 to 180) are sharp (none: no automatic sharp edges)"),
