@@ -401,6 +401,10 @@ mod tests {
         assert_eq!(o.hex.map.level, None);
         o.set_option("polycube.orientations", OptionValue::String("SignFlips".into())).unwrap();
         assert_eq!(o.option("polycube.orientations").unwrap(), OptionValue::String("SignFlips".into()));
+        assert_eq!(o.option("hex.map.surface_map").unwrap(), OptionValue::String("Projection".into()));
+        o.set_option("hex.map.surface_map", OptionValue::String("Charts".into())).unwrap();
+        assert_eq!(o.hex.map.surface_map, crate::hex::SurfaceMap::Charts);
+        assert!(o.set_option("hex.map.surface_map", OptionValue::String("Nearest".into())).is_err());
         o.set_option("polycube.verify.tau_cd", OptionValue::Number(0.02)).unwrap();
         assert_eq!(o.polycube.verify.tau_cd, 0.02);
         let before = o.clone();
