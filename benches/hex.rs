@@ -1,6 +1,6 @@
 //! Hex-mesh benchmark over the real test meshes (BENCHMARKS.md "Hex mesh").
 //!
-//! cargo bench --bench hex -- [FILTER...] [--level N] [--levels 1-4] [--out DIR] [--info]
+//! cargo bench --bench hex -- [FILTER...] [--level N] [--levels 1-4] [--out DIR] [--info] [--surface-map charts]
 //!
 //! For every model whose name contains one of the filters (all when none): load,
 //! PCA-align, map onto the hand-chosen context, build the hex mesh and print one
@@ -63,6 +63,13 @@ fn run() {
             "--reference" => reference = true,
             "--levels" => {
                 levels = Some(args[i + 1].clone());
+                i += 1;
+            }
+            "--surface-map" => {
+                opts.map.surface_map = match args[i + 1].as_str() {
+                    "charts" => sddpm::hex::SurfaceMap::Charts,
+                    _ => sddpm::hex::SurfaceMap::Projection,
+                };
                 i += 1;
             }
             "--raw" => opts.quality.keep_better_mapped = false,
@@ -210,6 +217,24 @@ fn run() {
             r.returned,
             secs
         );
+        // one comparison row: surface map, elements, inverted, min / mean scaled
+        // Jacobian, Hausdorff, irregular edges, seconds
+        println!(
+            "ROW | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.2} % | {} | {:.1} |",
+            file.split('.').next().unwrap(),
+            labels_override.as_deref().unwrap_or(labels),
+            r.surface_map.method,
+            r.mesh.elements.len(),
+            r.quality.inverted,
+            r.quality.min,
+            r.quality.mean,
+            100.0 * r.hausdorff_relative,
+            sddpm::hex::topology::irregular_edges(&r.mesh).total(),
+            secs
+        );
+        if let Some(w) = &r.surface_map.why {
+            println!("    surface map: projection because {w}");
+        }
         for s in &r.stages {
             println!(
                 "    {:<13} min {:.3} -> {:.3}  mean {:.3} -> {:.3}  inv {} -> {}  {:.2}s",

@@ -222,3 +222,71 @@ fn a_warped_l_shape_gives_eight_charts_and_maps_its_l_shaped_faces() {
     }
     assert_eq!(non_convex, 2);
 }
+
+/// Mesh `ctx` through the polycube path at level 1 with the chart surface map and
+/// check the mapped mesh: no inverted element, every boundary node on the input
+/// (within 1e-9 of the diagonal), and every node on one polycube face at the inverse
+/// map of its polycube point, in a triangle of that face's chart.
+fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surface: TriMesh) {
+    use sddpm::hex::charts::ChartInverse;
+    let frame = context_frame(ctx).unwrap();
+    let inp = input(ctx, surface.clone());
+    let mut opts = HexOptions::default();
+    opts.map.level = Some(1);
+    opts.map.surface_map = sddpm::hex::SurfaceMap::Charts;
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    assert_eq!(r.surface_map.method, "charts", "{:?}", r.surface_map.why);
+    assert_eq!(r.surface_map.why, None);
+    let q = sddpm::hex::quality::summary(&r.mapped);
+    assert_eq!(q.inverted, 0, "inverted elements after mapping (min SJ {:.3})", q.min);
+    let diag = sddpm::geometry::Aabb::of_points(&surface.vertices).diagonal();
+    let loc = sddpm::geometry::SurfaceLocator::new(&surface);
+    let c = segment_and_map(&inp, &ChartOptions::default()).unwrap();
+    let ci = ChartInverse::new(&surface, &c).unwrap();
+    let lat = lattice_hex(&ctx.assemble(), r.level);
+    assert_eq!(r.mapped.elements, lat.mesh.elements, "the mapped mesh is the lattice mesh");
+    let mut on_boundary = std::collections::HashSet::new();
+    for bq in boundary_quads(&r.mapped).unwrap() {
+        on_boundary.extend(bq.nodes);
+    }
+    let mut single = 0;
+    for &v in &on_boundary {
+        let p = r.mapped.nodes[v as usize];
+        let d = loc.closest(p).2;
+        assert!(d < 1e-9 * diag, "boundary node {v} is {d:e} off the input");
+        let u = frame.to_normalised(lat.mesh.nodes[v as usize]);
+        let faces = ci.faces_at(u);
+        assert!(!faces.is_empty(), "boundary node {v} is on no polycube face");
+        let l = ci.locate(u).unwrap();
+        assert!(norm(sub(l.point, p)) < 1e-9 * diag, "node {v} is not at its chart image");
+        if faces.len() == 1 {
+            single += 1;
+            assert_eq!(c.segmentation.face_of[l.triangle as usize] as usize, faces[0], "node {v} is outside its face's chart");
+        }
+    }
+    assert!(single > 0);
+}
+
+#[test]
+fn the_chart_surface_map_meshes_a_warped_box_and_a_warped_torus() {
+    let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    chart_surface_map_is_on_the_input_and_in_the_right_chart(&cube, warped(polycube_surface(&cube, 4), 0.01));
+    let thc = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    chart_surface_map_is_on_the_input_and_in_the_right_chart(&thc, warped(polycube_surface(&thc, 3), 0.005));
+}
+
+#[test]
+fn the_chart_surface_map_falls_back_to_the_projection_with_the_reason() {
+    // a box surface with the context of a through-hole cube: the hole walls get no chart
+    let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let thc = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mut opts = HexOptions::default();
+    opts.map.level = Some(1);
+    opts.map.surface_map = sddpm::hex::SurfaceMap::Charts;
+    let r = build_hex_mesh(&input(&thc, polycube_surface(&cube, 3)), &opts, &mut NoProgress).unwrap();
+    assert_eq!(r.surface_map.method, "projection");
+    let why = r.surface_map.why.clone().expect("the reason is recorded");
+    assert!(why.contains("has no chart"), "{why}");
+    let js = sddpm::hex::report_json(&r);
+    assert_eq!(js["surface_map"]["method"], "projection", "{js}");
+}

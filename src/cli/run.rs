@@ -6,7 +6,7 @@ use super::polycube::{load_generator, options_of, request_of, GeneratorArgs, Pol
 use sddpm::error::{Error, Progress};
 use sddpm::export::lsdyna::{Analysis, DeckOptions, Material, Units};
 use sddpm::export::spline_files::{OutputOptions, MAX_SAMPLES};
-use sddpm::hex::{HexOption, HexOptions};
+use sddpm::hex::{HexOption, HexOptions, SurfaceMap};
 use sddpm::pipeline::report::{write_run_folder, InputInfo};
 use sddpm::pipeline::{run as run_job, RunOptions, RunResult};
 use sddpm::Result;
@@ -127,6 +127,9 @@ pub struct HexArgs {
     /// Fix the octree subdivision level (default: chosen by the stopping rule).
     #[arg(long, help_heading = "Mesh size and quality goals")]
     pub level: Option<u32>,
+    /// Surface map of the polycube path: projection (closest facing point and relaxation, the default) or charts (inverse chart maps; the projection where a chart does not map; docs/hex.md).
+    #[arg(long, value_name = "METHOD", help_heading = "Polycube")]
+    pub surface_map: Option<String>,
     /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
     #[arg(long, help_heading = "Grid-based fallback")]
     pub voxel_resolution: Option<usize>,
@@ -161,6 +164,12 @@ pub struct HexArgs {
 pub fn hex_options(a: &HexArgs, d: &HexDevArgs, hex: &mut HexOptions) -> Result<()> {
     hex.map.level = a.level;
     hex.target_size = a.size;
+    match a.surface_map.as_deref() {
+        None => {}
+        Some("projection") => hex.map.surface_map = SurfaceMap::Projection,
+        Some("charts") => hex.map.surface_map = SurfaceMap::Charts,
+        Some(o) => return Err(Error::InvalidArgument(format!("--surface-map must be projection or charts, got {o:?}"))),
+    }
     if let Some(n) = a.voxel_resolution {
         hex.fallback.resolution = n;
     }

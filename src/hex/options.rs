@@ -82,6 +82,21 @@ pub struct MapOptions {
     /// Without a correspondence, fit the polycube's sub-voxel planes to the input
     /// before mapping (default true).
     pub fit_planes: bool,
+    /// How the boundary of the polycube's lattice mesh goes onto the input (default
+    /// [`SurfaceMap::Projection`]; docs/hex.md "Surface map from the charts").
+    pub surface_map: SurfaceMap,
+}
+
+/// The surface map of the polycube path ([`MapOptions::surface_map`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum SurfaceMap {
+    /// Closest facing point on the input, matched feature curves and corners,
+    /// relaxation on the surface.
+    #[default]
+    Projection,
+    /// The inverse of the chart maps (one chart of the input per polycube face,
+    /// mapped bijectively onto it); the projection where a chart does not map.
+    Charts,
 }
 
 /// Highest subdivision level of the polycube map.
@@ -89,7 +104,7 @@ pub const MAX_LEVEL: u32 = 6;
 
 impl Default for MapOptions {
     fn default() -> Self {
-        MapOptions { level: None, min_level: 2, max_level: 4, threshold: 0.005, stall_ratio: 0.75, use_correspondence: false, fit_planes: true }
+        MapOptions { level: None, min_level: 2, max_level: 4, threshold: 0.005, stall_ratio: 0.75, use_correspondence: false, fit_planes: true, surface_map: SurfaceMap::Projection }
     }
 }
 

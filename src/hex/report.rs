@@ -88,6 +88,12 @@ pub struct LevelReport {
 /// How the surface map was set up.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SurfaceMapReport {
+    /// How the boundary went onto the input: "charts" (inverse chart maps),
+    /// "projection" (closest facing point and relaxation) or "lattice" (the
+    /// grid-based fallback's fit).
+    pub method: String,
+    /// Why the projection was used where the charts were asked for (None otherwise).
+    pub why: Option<String>,
     pub feature_curves: usize,
     pub feature_corners: usize,
     pub matched_corners: usize,

@@ -2,6 +2,7 @@
 //! mapped onto the input (steps 2-4 of [`super`]), each level prolonged from the
 //! one before, until the stopping rule picks one.
 
+use super::charts::{segment_and_map, ChartInverse, ChartOptions};
 use super::correspondence::Correspondence;
 use super::features::{match_features, roles, FeatureMatch};
 use super::warp::{fit_warp, Warp, WarpReport};
@@ -19,7 +20,7 @@ use crate::hex::quality::untangle::untangle;
 use crate::hex::report::{LevelReport, SurfaceMapReport};
 use crate::hex::surface::Surface;
 use crate::hex::work::{boundary_graph, quad_normals, Level, Role, Work};
-use crate::hex::{topology, HexMesh, HexOptions};
+use crate::hex::{topology, HexMesh, HexOptions, SurfaceMap};
 use crate::mesh::TriMesh;
 use crate::polycube::assembly::occupied_cell_box;
 use crate::polycube::tensor::BoxFrame;
@@ -47,6 +48,8 @@ struct Start<'a> {
     fm: FeatureMatch,
     sw: &'a Surface,
     relax_iterations: usize,
+    /// The inverse chart maps, when they are the surface map.
+    charts: Option<ChartInverse>,
 }
 
 /// Map the levels of `input`'s polycube onto its surface (`mesh_n`: the surface in
@@ -54,8 +57,21 @@ struct Start<'a> {
 /// by the stopping rule (docs/hex.md "Levels").
 pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, progress: &mut dyn Progress) -> Result<Mapped> {
     let grid = input.context.assemble();
-    let (start, warp_report) = start(input, mesh_n, &grid, fr, opts);
+    let (mut start, warp_report) = start(input, mesh_n, &grid, fr, opts);
+    let why = if opts.map.surface_map == SurfaceMap::Charts {
+        match chart_inverse(input) {
+            Ok(ci) => {
+                start.charts = Some(ci);
+                None
+            }
+            Err(why) => Some(why),
+        }
+    } else {
+        None
+    };
     let smap = SurfaceMapReport {
+        method: if start.charts.is_some() { "charts" } else { "projection" }.into(),
+        why,
         feature_curves: fr.sw.features.curves.len(),
         feature_corners: fr.sw.features.corners.len(),
         matched_corners: start.fm.corners.len(),
@@ -129,7 +145,7 @@ fn start<'a>(input: &HexInput, mesh_n: TriMesh, grid: &VoxelGrid, fr: &'a Frames
     let radius = 0.5 * frame.scale / 3.0;
     let fm: FeatureMatch = match_features(&h1, &pos_n1, &sn, radius);
     drop(h1);
-    let start = Start { frame, warp, to_w: fr.to_w, corr, fm, sw: &fr.sw, relax_iterations: opts.surface.relax_iterations };
+    let start = Start { frame, warp, to_w: fr.to_w, corr, fm, sw: &fr.sw, relax_iterations: opts.surface.relax_iterations, charts: None };
     (start, warp_report)
 }
 
@@ -156,6 +172,12 @@ fn map_level(grid: &VoxelGrid, l: u32, prev: Option<&Level>, s: &Start, fit_stat
     let e = topology::edges(&h.mesh);
     work.nbr = topology::node_neighbours(n, &e);
     work.n2e = topology::node_elements(&h.mesh);
+    if let Some(ci) = s.charts.as_ref() {
+        let interp = prev.map(|pv| prolong(&pv.h, &pv.pos, &h));
+        chart_start(&mut work, &h, ci, s, interp.as_deref());
+        let level = Level { h, pos: work.mesh.nodes, attach: work.attach, role, curve_nb, bquads, released_corners: Vec::new() };
+        return (level, interp);
+    }
     let interp = match prev {
         None => {
             // the polycube itself (plus the correspondence seed) in the working frame
@@ -193,6 +215,52 @@ fn map_level(grid: &VoxelGrid, l: u32, prev: Option<&Level>, s: &Start, fit_stat
     };
     let level = Level { h, pos: work.mesh.nodes, attach: work.attach, role, curve_nb, bquads, released_corners: Vec::new() };
     (level, interp)
+}
+
+/// The segmentation and chart maps of `input`, inverted; Err says why they cannot
+/// be the surface map (a chart that does not match its face, does not map or maps
+/// with flipped triangles).
+fn chart_inverse(input: &HexInput) -> std::result::Result<ChartInverse, String> {
+    let charts = segment_and_map(input, &ChartOptions::default()).map_err(|e| e.to_string())?;
+    ChartInverse::new(&input.surface, &charts)
+}
+
+/// A level mapped by the charts: every boundary node at the inverse chart map of
+/// its point on the polycube (the closest surface point in the rare case that no
+/// chart holds it), the interior by the harmonic map from the prolonged positions
+/// `interp` (the warped lattice on level 0).
+fn chart_start(work: &mut Work, h: &LatticeHex, ci: &ChartInverse, s: &Start, interp: Option<&[[f64; 3]]>) {
+    let mut pos: Vec<[f64; 3]> = match interp {
+        Some(p) => p.to_vec(),
+        None => h.mesh.nodes.iter().map(|&g| s.to_w.apply(s.warp.apply(g))).collect(),
+    };
+    let (frame, to_w, sw, role) = (&s.frame, &s.to_w, s.sw, &work.role);
+    let placed: Vec<Option<([f64; 3], u32)>> = h
+        .mesh
+        .nodes
+        .par_iter()
+        .enumerate()
+        .map(|(v, &g)| {
+            if !role[v].on_boundary() {
+                return None;
+            }
+            Some(match ci.locate(frame.to_normalised(g)) {
+                Some(l) => (to_w.apply(l.point), l.triangle),
+                None => {
+                    let (q, t, _) = sw.closest(pos[v]);
+                    (q, t)
+                }
+            })
+        })
+        .collect();
+    for (v, p) in placed.into_iter().enumerate() {
+        if let Some((q, t)) = p {
+            pos[v] = q;
+            work.attach[v] = t;
+        }
+    }
+    harmonic_interior(&work.nbr, &work.role, &mut pos, 1e-9, 5000);
+    work.mesh.nodes = pos;
 }
 
 /// A finer level's start: its boundary nodes from the prolonged positions

@@ -76,6 +76,7 @@ pub(super) fn mesh_lattice(
         seconds: t0.elapsed().as_secs_f64(),
     }];
     let smap = SurfaceMapReport {
+        method: "lattice".into(),
         feature_curves: sw.features.curves.len(),
         feature_corners: sw.features.corners.len(),
         ..Default::default()

@@ -10,16 +10,20 @@
 //! 3. [`topology`]: the check of the charts against the faces (connected, disc or
 //!    annulus as the face is, adjacency, corners) with a diagnostic per mismatch;
 //! 4. [`chart_map`]: each chart onto its face (boundary by arc length between the
-//!    corners, interior by a Tutte embedding) with a count of flipped triangles.
+//!    corners, interior by a Tutte embedding) with a count of flipped triangles;
+//! 5. [`inverse`]: the inverse of the chart maps, a polycube boundary point onto
+//!    the input (the surface map of [`crate::hex::SurfaceMap::Charts`]).
 //!
 //! [`segment_and_map`] runs them all on a [`HexInput`].
 
 pub mod chart_map;
 pub mod faces;
+pub mod inverse;
 pub mod segment;
 pub mod topology;
 
 pub use chart_map::{map_chart, ChartMap};
+pub use inverse::{ChartInverse, Located};
 pub use faces::{polycube_faces, PolyCorner, PolyEdge, PolyFace, PolycubeFaces};
 pub use topology::{ChartStats, ChartTopology, Diagnostic};
 
