@@ -563,7 +563,7 @@ class Spline(_Handle):
         return x, j
 
     def write(self, folder: str | os.PathLike) -> None:
-        """spline.bext, model.k, spline.vtk, spline_control.vtk into folder."""
+        """spline.bext, model.k, spline.vtu, spline_control.vtk into folder."""
         _check(load_library().sddpm_spline_write(self.handle, _path(folder, "folder")))
 
     def report(self) -> dict:
