@@ -145,19 +145,7 @@ pub fn surface_distance(sp: &Spline, loc: &SurfaceLocator, surf: &TriMesh, sampl
     let wsum: f64 = weights.iter().sum();
     let rms = (dists.iter().zip(&weights).map(|(d, w)| w * d * d).sum::<f64>() / wsum.max(f64::MIN_POSITIVE)).sqrt();
     // reverse direction: surface vertices to the triangulated spline boundary
-    let mut tri = TriMesh::default();
-    for (fi, _) in faces.iter().enumerate() {
-        let base = (fi * m * m) as u32;
-        for b in 0..m - 1 {
-            for a in 0..m - 1 {
-                let i0 = base + (b * m + a) as u32;
-                let (i1, i2, i3) = (i0 + 1, i0 + 1 + m as u32, i0 + m as u32);
-                tri.triangles.push([i0, i1, i2]);
-                tri.triangles.push([i0, i2, i3]);
-            }
-        }
-    }
-    tri.vertices = pts;
+    let tri = TriMesh { vertices: pts, triangles: face_grid_triangles(faces.len(), m) };
     let back = if tri.triangles.is_empty() {
         0.0
     } else {
@@ -223,6 +211,24 @@ pub fn fit_boundary_with(sp: &mut Spline, loc: &SurfaceLocator, surf: &TriMesh, 
         sys.apply_with_backtracking(sp, &p0, &solution, fo);
     }
     Ok(())
+}
+
+/// Two triangles per cell of `n_faces` grids of `k` x `k` points each, the points
+/// numbered face by face, row by row (the sampled boundary's triangulation).
+fn face_grid_triangles(n_faces: usize, k: usize) -> Vec<[u32; 3]> {
+    let mut t = Vec::with_capacity(2 * n_faces * k.saturating_sub(1).pow(2));
+    for fi in 0..n_faces {
+        let base = (fi * k * k) as u32;
+        for b in 0..k.saturating_sub(1) {
+            for a in 0..k - 1 {
+                let i0 = base + (b * k + a) as u32;
+                let (i1, i2, i3) = (i0 + 1, i0 + 1 + k as u32, i0 + k as u32);
+                t.push([i0, i1, i2]);
+                t.push([i0, i2, i3]);
+            }
+        }
+    }
+    t
 }
 
 /// One least-squares row: the basis functions (ids) and their values at a point.
@@ -430,18 +436,7 @@ fn reverse_rows(sp: &Spline, faces: &[(usize, usize, usize)], kf: usize, surf: &
         .iter()
         .flat_map(|&(e, d, s)| (0..kf * kf).map(move |k| (e, face_param(d, s, k % kf, k / kf, kf, false))))
         .collect();
-    let mut tri = TriMesh { vertices: params.par_iter().map(|&(e, p)| point_of(spr, e, p)).collect(), triangles: Vec::new() };
-    for fi in 0..faces.len() {
-        let base = (fi * kf * kf) as u32;
-        for b in 0..kf - 1 {
-            for a in 0..kf - 1 {
-                let i0 = base + (b * kf + a) as u32;
-                let (i1, i2, i3) = (i0 + 1, i0 + 1 + kf as u32, i0 + kf as u32);
-                tri.triangles.push([i0, i1, i2]);
-                tri.triangles.push([i0, i2, i3]);
-            }
-        }
-    }
+    let tri = TriMesh { vertices: params.par_iter().map(|&(e, p)| point_of(spr, e, p)).collect(), triangles: face_grid_triangles(faces.len(), kf) };
     let bl = SurfaceLocator::new(&tri);
     let stride = surf.vertices.len().div_ceil(fo.max_reverse_points.max(1)).max(1);
     surf
