@@ -227,7 +227,7 @@ fn a_warped_l_shape_gives_eight_charts_and_maps_its_l_shaped_faces() {
 /// check the mapped mesh: no inverted element, every boundary node on the input
 /// (within 1e-9 of the diagonal), and every node on one polycube face at the inverse
 /// map of its polycube point, in a triangle of that face's chart.
-fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surface: TriMesh) {
+fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surface: TriMesh, corners: usize, chains: usize) {
     use sddpm::hex::charts::ChartInverse;
     let frame = context_frame(ctx).unwrap();
     let inp = input(ctx, surface.clone());
@@ -237,6 +237,10 @@ fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surfa
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     assert_eq!(r.surface_map.method, "charts", "{:?}", r.surface_map.why);
     assert_eq!(r.surface_map.why, None);
+    // the polycube's corners and edges land on the input's feature corners and
+    // sharp curves, which the quality steps then keep them on
+    let sm = &r.surface_map;
+    assert_eq!((sm.matched_corners, sm.matched_chains), (corners, chains), "{sm:?}");
     let q = sddpm::hex::quality::summary(&r.mapped);
     assert_eq!(q.inverted, 0, "inverted elements after mapping (min SJ {:.3})", q.min);
     let diag = sddpm::geometry::Aabb::of_points(&surface.vertices).diagonal();
@@ -270,9 +274,9 @@ fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surfa
 #[test]
 fn the_chart_surface_map_meshes_a_warped_box_and_a_warped_torus() {
     let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
-    chart_surface_map_is_on_the_input_and_in_the_right_chart(&cube, warped(polycube_surface(&cube, 4), 0.01));
+    chart_surface_map_is_on_the_input_and_in_the_right_chart(&cube, warped(polycube_surface(&cube, 4), 0.01), 8, 12);
     let thc = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
-    chart_surface_map_is_on_the_input_and_in_the_right_chart(&thc, warped(polycube_surface(&thc, 3), 0.005));
+    chart_surface_map_is_on_the_input_and_in_the_right_chart(&thc, warped(polycube_surface(&thc, 3), 0.005), 16, 24);
 }
 
 #[test]

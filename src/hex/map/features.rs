@@ -146,6 +146,35 @@ pub fn match_features(h0: &LatticeHex, pos_n: &[[f64; 3]], sn: &Surface, radius:
     fm
 }
 
+/// Matching of polycube corners and edge chains to the input's feature corners
+/// and curves from a lattice mesh `h` (level >= 1) already placed on the surface
+/// `sw` (`pos`, e.g. by the inverse chart maps, which put the polycube's corners
+/// on input vertices and its edges on chart boundaries): a corner placed on a
+/// feature corner is matched to it, a chain whose inner nodes all lie on one
+/// feature curve to that curve; `eps` is the distance that counts as on it.
+pub fn match_placed_features(h: &LatticeHex, pos: &[[f64; 3]], sw: &Surface, eps: f64) -> FeatureMatch {
+    let masks = normal_masks(h);
+    let mut fm = FeatureMatch::default();
+    let mut chains: HashMap<ChainKey, Vec<usize>> = HashMap::new();
+    for (v, &m) in masks.iter().enumerate() {
+        if m.count_ones() >= 3 {
+            let on = sw.features.corners.iter().find(|&&c| norm(sub(pos[v], sw.mesh.vertices[c as usize])) <= eps);
+            if let Some(&c) = on {
+                fm.corners.insert(level_free(h, h.node_lattice[v]), c);
+            }
+        } else if let Some((key, _)) = chain_of(h, &masks, v) {
+            chains.entry(key).or_default().push(v);
+        }
+    }
+    for (key, nodes) in chains {
+        let on_curve = (0..sw.features.curves.len()).find(|&c| nodes.iter().all(|&v| sw.closest_on_curve(c, pos[v]).distance <= eps));
+        if let Some(c) = on_curve {
+            fm.chains.insert(key, c as u32);
+        }
+    }
+    fm
+}
+
 /// Roles of the nodes of a lattice hex mesh under a feature match, and for curve
 /// nodes their neighbours along the curve.
 pub fn roles(h: &LatticeHex, fm: &FeatureMatch) -> (Vec<Role>, Vec<Vec<u32>>) {

@@ -4,7 +4,7 @@
 
 use super::charts::{segment_and_map, ChartInverse, ChartOptions};
 use super::correspondence::Correspondence;
-use super::features::{match_features, roles, FeatureMatch};
+use super::features::{match_features, match_placed_features, roles, FeatureMatch};
 use super::warp::{fit_warp, Warp, WarpReport};
 use super::HexInput;
 use crate::context::context_frame;
@@ -62,6 +62,7 @@ pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &
         match chart_inverse(input) {
             Ok(ci) => {
                 start.charts = Some(ci);
+                start.fm = chart_feature_match(&grid, &start, fr);
                 None
             }
             Err(why) => Some(why),
@@ -215,6 +216,15 @@ fn map_level(grid: &VoxelGrid, l: u32, prev: Option<&Level>, s: &Start, fit_stat
     };
     let level = Level { h, pos: work.mesh.nodes, attach: work.attach, role, curve_nb, bquads, released_corners: Vec::new() };
     (level, interp)
+}
+
+/// The feature match under the chart maps: level 1 placed by them (every polycube
+/// edge has an inner node there), its corners and chains matched to the feature
+/// corners and curves they landed on, so that the quality steps keep those nodes
+/// on the input's corners and sharp curves instead of sliding them off.
+fn chart_feature_match(grid: &VoxelGrid, s: &Start, fr: &Frames) -> FeatureMatch {
+    let (l1, _) = map_level(grid, 1, None, s, &mut Vec::new());
+    match_placed_features(&l1.h, &l1.pos, s.sw, 1e-7 * fr.diag_w)
 }
 
 /// The segmentation and chart maps of `input`, inverted; Err says why they cannot
