@@ -8,41 +8,17 @@ use sddpm::hex::quality::{element_qualities, summarize};
 use sddpm::hex::topology::{hex_volume, mesh_volume};
 use sddpm::hex::{build_hex_mesh, Affine, Domain, HexInput, HexOptions, HexResult, Stage};
 use sddpm::mesh::{LoadOptions, TriMesh};
-use sddpm::context::context_frame;
 
+
+#[path = "support/polycube_surface.rs"]
+mod support;
 
 /// The polycube's own boundary in the normalised frame, every quad split k x k, then
 /// moved by `deform`.
 fn polycube_surface(ctx: &Context, k: usize, deform: impl Fn([f64; 3]) -> [f64; 3]) -> TriMesh {
-    let q = sddpm::polycube::boundary(&ctx.assemble());
-    let frame = context_frame(ctx).unwrap();
-    let mut verts: Vec<[f64; 3]> = Vec::new();
-    let mut index = std::collections::HashMap::new();
-    let mut id = |p: [f64; 3], verts: &mut Vec<[f64; 3]>| -> u32 {
-        let key = p.map(|v| (v * 1e9).round() as i64);
-        *index.entry(key).or_insert_with(|| {
-            verts.push(p);
-            verts.len() as u32 - 1
-        })
-    };
-    let mut tris = Vec::new();
-    for quad in &q.quads {
-        let p = quad.map(|i| q.vertices[i as usize]);
-        let at = |u: f64, v: f64| -> [f64; 3] {
-            let a = add(scale(p[0], 1.0 - u), scale(p[1], u));
-            let b = add(scale(p[3], 1.0 - u), scale(p[2], u));
-            add(scale(a, 1.0 - v), scale(b, v))
-        };
-        for j in 0..k {
-            for i in 0..k {
-                let (u0, u1, v0, v1) = (i as f64 / k as f64, (i + 1) as f64 / k as f64, j as f64 / k as f64, (j + 1) as f64 / k as f64);
-                let c = [at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)].map(|g| id(frame.to_normalised(g), &mut verts));
-                tris.push([c[0], c[1], c[2]]);
-                tris.push([c[0], c[2], c[3]]);
-            }
-        }
-    }
-    TriMesh { vertices: verts.into_iter().map(deform).collect(), triangles: tris }
+    let mut m = support::polycube_surface(ctx, k, support::Diagonals::Fixed);
+    m.vertices = m.vertices.into_iter().map(deform).collect();
+    m
 }
 
 /// The default options with the subdivision level fixed.
