@@ -8,7 +8,7 @@
 //!
 //! `cargo bench --bench recovery -- [--seed 9100] [--per-group 48]
 //! [--families reported|tuning|all|name,...] [--groups simple,medium,complex]
-//! [--generator learned|template] [--csv FILE] [--threads N]`
+//! [--generator learned|template] [--csv FILE] [--threads N] [--register-cells]`
 //!
 //! Case k of group g is [`EvalCase::generate`] with seed `case_seed(seed, g, k)`,
 //! deformed by the k-th of the families in turn (the families spread evenly over
@@ -90,7 +90,7 @@ fn runner_up(pr: &PolycubeResult) -> Option<(String, f64)> {
         .map(|(n, s2)| (n, (s2 - s1) / s1.abs().max(1e-12)))
 }
 
-fn run_case(model: &Model, opts: &PolycubeOptions, job: Job) -> Row {
+fn run_case(model: &Model, opts: &PolycubeOptions, aopts: &AutoOptions, job: Job) -> Row {
     let g = COMPLEXITY_GROUPS[job.gi];
     let mut row = Row {
         job,
@@ -124,7 +124,7 @@ fn run_case(model: &Model, opts: &PolycubeOptions, job: Job) -> Row {
     // as the command line: the genus the mesh check measures
     let genus = case.mesh.check().genus.unwrap_or(case.genus);
     let t = Instant::now();
-    let out = generate_polycube(model, &case.mesh, genus, &ContextRequest::Auto, opts, &AutoOptions::default(), &mut NoProgress);
+    let out = generate_polycube(model, &case.mesh, genus, &ContextRequest::Auto, opts, aopts, &mut NoProgress);
     row.seconds = t.elapsed().as_secs_f64();
     match out {
         Ok((pr, rep, err)) => {
@@ -191,6 +191,8 @@ fn main() {
     let generator: String = arg(&args, "--generator").unwrap_or_else(|| "learned".into());
     let csv_path: Option<String> = arg(&args, "--csv");
     let threads: usize = arg::<usize>(&args, "--threads").unwrap_or(1).max(1);
+    // `--register-cells`: rank the labels by the in-context fit after the cell registration
+    let aopts = AutoOptions { register_cells: args.iter().any(|a| a == "--register-cells"), ..AutoOptions::default() };
     // the command line's options for `--generator` (learned: the embedded weights)
     let load = || -> (Model, PolycubeOptions) {
         match generator.as_str() {
@@ -220,7 +222,7 @@ fn main() {
                 loop {
                     let i = next.fetch_add(1, Ordering::SeqCst);
                     let Some(&job) = jobs.get(i) else { break };
-                    let r = run_case(&model, &opts, job);
+                    let r = run_case(&model, &opts, &aopts, job);
                     let n = done.fetch_add(1, Ordering::SeqCst) + 1;
                     let outcome = match (&r.verdict.loss, &r.chosen) {
                         (None, _) => format!("recovered ({})", r.chosen.as_deref().unwrap_or("-")),

@@ -135,7 +135,7 @@ fn rank_labels(run: &Run, subs: &[Subregion], labels_of: &[Vec<Primitive>], loca
     let mut options: Vec<Vec<Primitive>> = Vec::new();
     // every feasible label of each subregion, best in-context fit first
     let mut full: Vec<Vec<Primitive>> = Vec::new();
-    let scores = in_context_fits(run.fit_sub, subs, labels_of);
+    let scores = in_context_fits(run.fit_sub, subs, labels_of, aopts.register_cells);
     for (si, sub) in subs.iter().enumerate() {
         let labels = &labels_of[si];
         let mut lr = LocalResult { subregion: sub.clone(), fits: Vec::new(), kept: Vec::new(), verified: Vec::new() };

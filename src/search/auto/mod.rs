@@ -109,11 +109,18 @@ pub struct AutoOptions {
     /// to the box's candidates (default false: measured in BENCHMARKS.md "Context
     /// search", not yet on the real meshes).
     pub joint_labels: bool,
+    /// Rank a subregion's labels by the in-context fit after a local affine
+    /// registration of the cell (`search::generate::register`: twisted, tapered,
+    /// bent or sheared cells fit their own label again) instead of the rigid fit
+    /// (default false: on the tuning families it keeps the true label more often
+    /// but recovers no more parts, BENCHMARKS.md "Label ranking with cell
+    /// registration").
+    pub register_cells: bool,
 }
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false }
+        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false }
     }
 }
 

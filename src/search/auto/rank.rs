@@ -3,7 +3,8 @@
 //! fit, the global fit of every candidate and the order in which the boxes are
 //! tried, in a length common to every box.
 
-use super::super::generate::{fit_score_cells, fit_score_scaled, polycube_samples, worst_and_mean, FIT_SAMPLES};
+use super::super::generate::register::registered_fit;
+use super::super::generate::{fit_points, fit_score_cells, fit_score_scaled, polycube_samples, worst_and_mean, FIT_SAMPLES};
 use super::boxes::BoxWork;
 use super::volume::{suggest_ratios, Subregion};
 use super::{AutoReport, BoxResult, Run};
@@ -124,7 +125,7 @@ pub(super) fn box_order(run: &Run, boxes: &[BoxWork], report: &AutoReport) -> Re
 /// synthetic cases the true label ranks first in every cell (BHC directions 0.004
 /// against 0.01 and more; BENCHMARKS.md "Context search").
 /// `scores[i][k]` belongs to `labels[i][k]`; null labels get NaN.
-pub fn in_context_fits(samples: &[SurfaceSample], subs: &[Subregion], labels: &[Vec<Primitive>]) -> Vec<Vec<f64>> {
+pub fn in_context_fits(samples: &[SurfaceSample], subs: &[Subregion], labels: &[Vec<Primitive>], register: bool) -> Vec<Vec<f64>> {
     use rayon::prelude::*;
     // cells that may be null (thin subregions) are null in the others' assemblies
     let mut base = [Primitive::Null; NUM_CELLS];
@@ -140,8 +141,15 @@ pub fn in_context_fits(samples: &[SurfaceSample], subs: &[Subregion], labels: &[
             let mut l = base;
             l[subs[i].cell] = labels[i][k];
             let ctx = Context::new(l);
-            let per = fit_score_cells(samples, &ctx, AxisRotation::IDENTITY, &polycube_samples(&ctx, FIT_SAMPLES), [1.0; 3]);
-            per[subs[i].cell]
+            let target = polycube_samples(&ctx, FIT_SAMPLES);
+            if !register {
+                return fit_score_cells(samples, &ctx, AxisRotation::IDENTITY, &target, [1.0; 3])[subs[i].cell];
+            }
+            let cell = subs[i].cell;
+            let Some((pts, cells)) = fit_points(samples, &ctx, AxisRotation::IDENTITY, [1.0; 3]) else { return f64::INFINITY };
+            let p: Vec<[f64; 3]> = pts.iter().zip(&cells).filter(|(_, c)| **c == cell).map(|(x, _)| *x).collect();
+            let q: Vec<[f64; 3]> = target.iter().filter(|t| t.1 == cell).map(|t| t.0).collect();
+            registered_fit(&p, &q)
         })
         .collect();
     let mut out: Vec<Vec<f64>> = labels.iter().map(|l| vec![f64::NAN; l.len()]).collect();

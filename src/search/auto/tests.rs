@@ -132,10 +132,13 @@ fn in_context_fits_rank_every_true_blind_hole_first() {
     let samples: Vec<SurfaceSample> = fit_sub.iter().map(|s| SurfaceSample { point: r.apply(s.point), ..*s }).collect();
     let subs: Vec<Subregion> = [0, 1, 3, 4].iter().map(|&c| subregion(c, 0.9, 0)).collect();
     let labels: Vec<Vec<Primitive>> = subs.iter().map(|s| feasible(s, 0.15).unwrap()).collect();
-    let scores = in_context_fits(&samples, &subs, &labels);
-    for (i, sub) in subs.iter().enumerate() {
-        let best = (0..labels[i].len()).min_by(|&a, &b| scores[i][a].total_cmp(&scores[i][b])).unwrap();
-        assert_eq!(labels[i][best], truth.labels[sub.cell], "cell {}: {:?}", sub.cell, labels[i].iter().zip(&scores[i]).collect::<Vec<_>>());
+    // rigid, and after the cell registration (which must not turn one label into another)
+    for register in [false, true] {
+        let scores = in_context_fits(&samples, &subs, &labels, register);
+        for (i, sub) in subs.iter().enumerate() {
+            let best = (0..labels[i].len()).min_by(|&a, &b| scores[i][a].total_cmp(&scores[i][b])).unwrap();
+            assert_eq!(labels[i][best], truth.labels[sub.cell], "register {register}, cell {}: {:?}", sub.cell, labels[i].iter().zip(&scores[i]).collect::<Vec<_>>());
+        }
     }
 }
 

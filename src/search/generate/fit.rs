@@ -47,26 +47,11 @@ pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotatio
 /// when the mapping or a cell's input is empty).
 pub fn fit_score_cells(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> [f64; NUM_CELLS] {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
-    let Some((frame, dlo, dhi)) = crate::search::inference::context_box(ctx) else { return [f64::INFINITY; NUM_CELLS] };
-    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels).unwrap();
-    let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for r in &rotated {
-        for a in 0..3 {
-            lo[a] = lo[a].min(r[a]);
-            hi[a] = hi[a].max(r[a]);
-        }
-    }
-    let map = crate::search::inference::BoxMap { rotation: AxisRotation::IDENTITY, src_lo: lo, src_hi: hi, dst_lo: dlo, dst_hi: dhi };
-    let mapped: Vec<[f64; 3]> = rotated.iter().map(|r| map.forward(*r)).collect();
-    if mapped.is_empty() || target.is_empty() {
+    let Some((grid_in, cells_in)) = fit_points(samples, ctx, rotation, scale) else { return [f64::INFINITY; NUM_CELLS] };
+    if target.is_empty() {
         return [f64::INFINITY; NUM_CELLS];
     }
-    let cells_in: Vec<usize> = mapped.iter().map(|q| crate::search::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
-    let scaled = |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|a| p[a] * scale[a]) };
-    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| scaled(frame.to_grid(*q))).collect();
-    let tgt: Vec<[f64; 3]> = target.iter().map(|t| scaled(t.0)).collect();
+    let tgt: Vec<[f64; 3]> = target.iter().map(|t| std::array::from_fn(|a| t.0[a] * scale[a])).collect();
     let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
     let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
     let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
@@ -91,6 +76,32 @@ pub fn fit_score_cells(samples: &[SurfaceSample], ctx: &Context, rotation: AxisR
         cells[c] = 0.5 * (a + sum_tg[c] / n_tg[c] as f64);
     }
     cells
+}
+
+/// The input samples as [`fit_score_cells`] compares them: rotated by `rotation`,
+/// their bounding box mapped onto the context's box, in grid units times `scale`
+/// per axis, each with the cell it falls in. None when the context has no
+/// occupied cell or there are no samples.
+pub fn fit_points(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, scale: [f64; 3]) -> Option<(Vec<[f64; 3]>, Vec<usize>)> {
+    let (frame, dlo, dhi) = crate::search::inference::context_box(ctx)?;
+    let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels)?;
+    if samples.is_empty() {
+        return None;
+    }
+    let rotated: Vec<[f64; 3]> = samples.iter().map(|s| rotation.apply(s.point)).collect();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for r in &rotated {
+        for a in 0..3 {
+            lo[a] = lo[a].min(r[a]);
+            hi[a] = hi[a].max(r[a]);
+        }
+    }
+    let map = crate::search::inference::BoxMap { rotation: AxisRotation::IDENTITY, src_lo: lo, src_hi: hi, dst_lo: dlo, dst_hi: dhi };
+    let mapped: Vec<[f64; 3]> = rotated.iter().map(|r| map.forward(*r)).collect();
+    let cells_in: Vec<usize> = mapped.iter().map(|q| crate::search::inference::cell_of(&frame, glo, ghi, &ctx.labels, *q)).collect();
+    let grid_in: Vec<[f64; 3]> = mapped.iter().map(|q| frame.to_grid(*q)).map(|g| std::array::from_fn(|a| g[a] * scale[a])).collect();
+    Some((grid_in, cells_in))
 }
 
 /// [`fit_score`] with the grid coordinates multiplied by `scale` per axis before the

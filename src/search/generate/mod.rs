@@ -22,11 +22,12 @@ use std::time::Instant;
 mod diffuse;
 mod fit;
 mod precheck;
+pub mod register;
 #[cfg(test)]
 mod tests;
 
 pub use precheck::{PRECHECK_SAMPLES, precheck, lay_out, without_fit_limit, limit_fit};
-pub use fit::{FIT_TAU, FIT_SAMPLES, polycube_samples, fit_score, fit_score_cells, fit_score_scaled, worst_and_mean, best_neighbour, refuse_worse_than_neighbours};
+pub use fit::{FIT_TAU, FIT_SAMPLES, polycube_samples, fit_points, fit_score, fit_score_cells, fit_score_scaled, worst_and_mean, best_neighbour, refuse_worse_than_neighbours};
 pub use diffuse::{diffuse_and_verify, generate_from_contexts, finish};
 
 /// Which of the 24 grid-preserving rotations of the aligned input are tried.
