@@ -8,7 +8,7 @@
 //!
 //! `cargo bench --bench recovery -- [--seed 9100] [--per-group 48]
 //! [--families reported|tuning|all|name,...] [--groups simple,medium,complex]
-//! [--generator learned|template] [--csv FILE] [--threads N] [--register-cells]`
+//! [--generator learned|template] [--csv FILE] [--threads N] [--register-cells] [--local-keep N]`
 //!
 //! Case k of group g is [`EvalCase::generate`] with seed `case_seed(seed, g, k)`,
 //! deformed by the k-th of the families in turn (the families spread evenly over
@@ -192,7 +192,12 @@ fn main() {
     let csv_path: Option<String> = arg(&args, "--csv");
     let threads: usize = arg::<usize>(&args, "--threads").unwrap_or(1).max(1);
     // `--register-cells`: rank the labels by the in-context fit after the cell registration
-    let aopts = AutoOptions { register_cells: args.iter().any(|a| a == "--register-cells"), ..AutoOptions::default() };
+    // `--local-keep N`: labels kept per subregion after the in-context fit
+    let aopts = AutoOptions {
+        register_cells: args.iter().any(|a| a == "--register-cells"),
+        local_keep: arg(&args, "--local-keep").unwrap_or(AutoOptions::default().local_keep),
+        ..AutoOptions::default()
+    };
     // the command line's options for `--generator` (learned: the embedded weights)
     let load = || -> (Model, PolycubeOptions) {
         match generator.as_str() {

@@ -88,7 +88,10 @@ pub struct AutoOptions {
     /// polycube leaves empty; an occupied cell is filled 0.6 or more, a through hole
     /// included).
     pub null_fill: f64,
-    /// Labels kept per subregion after the local fit (default 3).
+    /// Labels kept per subregion after the in-context fit (default 5; 3 lost the
+    /// true label of a deformed cell more often and recovered 24 of 72 tuning
+    /// cases where 5 recovers 27 and 7 also 27, slower: BENCHMARKS.md "Labels
+    /// kept per subregion").
     pub local_keep: usize,
     /// Run the local single-cell diffusion + verification (default true).
     pub local_diffusion: bool,
@@ -120,7 +123,7 @@ pub struct AutoOptions {
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 3, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false }
+        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 5, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false }
     }
 }
 
