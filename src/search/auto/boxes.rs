@@ -168,13 +168,21 @@ fn rank_labels(run: &Run, subs: &[Subregion], labels_of: &[Vec<Primitive>], loca
     (options, full)
 }
 
+/// Each cell's best labels that the trim to the budget removes only after every
+/// cell's lower-ranked ones: with five labels kept, a box of seven or more cells
+/// exceeds the budget, and a trim by fit ratio alone dropped third-ranked true
+/// labels that three kept labels never lost (BENCHMARKS.md "Labels kept per
+/// subregion").
+pub const TRIM_PROTECTED: usize = 3;
+
 /// Most label combinations (products of the kept labels) enumerated per box.
 pub const MAX_COMBINATIONS: usize = 20_000;
 
 /// Keep the product of the subregions' kept labels within `budget`: while it is
 /// larger, drop the kept label whose in-context fit is worst relative to its
 /// cell's best (the least plausible alternative of all cells; a cell keeps at
-/// least its best label, and null stays where it is allowed). A full 3 x 2 x 2
+/// least its best label, and its best [`TRIM_PROTECTED`] while any cell has
+/// more; null stays where it is allowed). A full 3 x 2 x 2
 /// box of genus-0 cells keeps 3^12 = 531,441 products otherwise, which refused
 /// every part of seven or more cells.
 pub(super) fn trim_to_budget(options: &mut [Vec<Primitive>], locals: &mut [LocalResult], budget: usize) {
@@ -183,14 +191,19 @@ pub(super) fn trim_to_budget(options: &mut [Vec<Primitive>], locals: &mut [Local
         if product <= budget as f64 {
             break;
         }
-        // (cell, fit of its worst kept label over its best)
-        let pick = (0..options.len())
-            .filter_map(|i| {
-                let k = options[i].iter().filter(|p| **p != Primitive::Null).count();
-                let fits = &locals[i].fits;
-                (k >= 2 && fits.len() >= k).then(|| (i, fits[k - 1].1 / fits[0].1.max(1e-12)))
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1));
+        // (cell, fit of its worst kept label over its best); the labels ranked
+        // below TRIM_PROTECTED go first, from every cell, before any cell loses
+        // one of its best TRIM_PROTECTED
+        let candidates = |floor: usize| {
+            (0..options.len())
+                .filter_map(|i| {
+                    let k = options[i].iter().filter(|p| **p != Primitive::Null).count();
+                    let fits = &locals[i].fits;
+                    (k > floor && fits.len() >= k).then(|| (i, fits[k - 1].1 / fits[0].1.max(1e-12)))
+                })
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        let pick = candidates(TRIM_PROTECTED).or_else(|| candidates(1));
         let Some((i, _)) = pick else { break };
         // a cell's kept labels are its best-ranked ones, in the order of its fits,
         // so the worst kept label is the last non-null one

@@ -269,3 +269,25 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
         assert!(msg.contains(want), "'{want}' missing from: {msg}");
     }
 }
+
+#[test]
+fn the_trim_takes_every_cells_lower_ranked_labels_before_its_best_three() {
+    // eight genus-0 cells with five kept labels each: 5^8 products, over the
+    // budget; 3^8 are within it, so every cell keeps its best three
+    let names = ["BHC+X", "BHC-Y", "cube", "BHC+Z", "THC+X"];
+    let mut options: Vec<Vec<Primitive>> = Vec::new();
+    let mut locals: Vec<LocalResult> = Vec::new();
+    for c in 0..8 {
+        // cell 0's third label is far worse than its best (the ratio alone would drop it first)
+        let fits: Vec<(String, f64)> = names.iter().enumerate().map(|(k, n)| (n.to_string(), 0.01 * (1.0 + k as f64 * if c == 0 { 20.0 } else { 1.0 }))).collect();
+        options.push(names.iter().map(|n| Primitive::parse(n).unwrap()).collect());
+        locals.push(LocalResult { subregion: subregion(c, 0.9, 0), fits, kept: names.iter().map(|n| n.to_string()).collect(), verified: Vec::new() });
+    }
+    trim_to_budget(&mut options, &mut locals, MAX_COMBINATIONS);
+    let product: usize = options.iter().map(|o| o.len()).product();
+    assert!(product <= MAX_COMBINATIONS, "{product}");
+    for o in &options {
+        assert!(o.len() >= 3 && o[..3].iter().map(|p| p.name()).eq(names[..3].iter().copied()), "{o:?}");
+    }
+}
+
