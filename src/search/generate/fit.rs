@@ -8,6 +8,16 @@ use super::*;
 /// more from the other surface, weighs far more than a smooth deformation.
 pub const FIT_TAU: f64 = 0.01;
 
+/// The fit score's penalty of a squared distance `d`: `d` up to [`FIT_TAU`],
+/// `d (1 + (d / FIT_TAU)^2)` above it.
+pub fn fit_penalty(d: f64) -> f64 {
+    if d <= FIT_TAU {
+        d
+    } else {
+        d * (1.0 + (d / FIT_TAU).powi(2))
+    }
+}
+
 /// Samples used by the geometric fit score.
 pub const FIT_SAMPLES: usize = 2048;
 
@@ -54,7 +64,7 @@ pub fn fit_score_cells(samples: &[SurfaceSample], ctx: &Context, rotation: AxisR
     let tgt: Vec<[f64; 3]> = target.iter().map(|t| std::array::from_fn(|a| t.0[a] * scale[a])).collect();
     let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
     let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
-    let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
+    let f = fit_penalty;
     let mut sum_in = [0.0f64; NUM_CELLS];
     let mut n_in = [0usize; NUM_CELLS];
     for (p, &c) in grid_in.iter().zip(&cells_in) {

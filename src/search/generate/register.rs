@@ -15,6 +15,7 @@
 //! another axis is a quarter turn away, a blind hole of the opposite side half a
 //! turn).
 
+use super::fit::fit_penalty;
 use super::FIT_TAU;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Matrix3, Vector3};
@@ -34,14 +35,14 @@ const IDENTITY_WEIGHT: f64 = 0.05;
 /// Fewest input points of the cell for a registration (fewer: the plain fit).
 const MIN_POINTS: usize = 16;
 
-/// The penalty Chamfer distance between `p` and `q` (squared distances, the
-/// penalty of [`super::fit_score_cells`] above [`FIT_TAU`]), the mean of both
+/// The penalty Chamfer distance between `p` and `q` (squared distances under
+/// [`fit_penalty`], as [`super::fit_score_cells`] takes them), the mean of both
 /// directions; infinite when either set is empty.
 pub fn cell_chamfer(p: &[[f64; 3]], q: &[[f64; 3]]) -> f64 {
     if p.is_empty() || q.is_empty() {
         return f64::INFINITY;
     }
-    let f = |d: f64| if d <= FIT_TAU { d } else { d * (1.0 + (d / FIT_TAU).powi(2)) };
+    let f = fit_penalty;
     let tp = ImmutableKdTree::new_from_slice(p).expect("non-empty");
     let tq = ImmutableKdTree::new_from_slice(q).expect("non-empty");
     let a: f64 = p.iter().map(|x| f(tq.query(x).nearest_one::<SquaredEuclidean<f64>>().execute().distance)).sum::<f64>() / p.len() as f64;
