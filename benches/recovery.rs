@@ -192,9 +192,11 @@ fn main() {
     let csv_path: Option<String> = arg(&args, "--csv");
     let threads: usize = arg::<usize>(&args, "--threads").unwrap_or(1).max(1);
     // `--register-cells`: rank the labels by the in-context fit after the cell registration
+    // `--opening-labels on|off`: rank first the labels whose hole the subregion shows
     // `--local-keep N`: labels kept per subregion after the in-context fit
     let aopts = AutoOptions {
         register_cells: args.iter().any(|a| a == "--register-cells"),
+        opening_labels: arg::<String>(&args, "--opening-labels").map_or(AutoOptions::default().opening_labels, |v| v == "on"),
         local_keep: arg(&args, "--local-keep").unwrap_or(AutoOptions::default().local_keep),
         ..AutoOptions::default()
     };

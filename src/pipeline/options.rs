@@ -121,6 +121,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("auto.local_steps", Integer, false, "Automated mode: sampler steps of the local single-cell diffusion"),
     opt("auto.joint_labels", Bool, false, "Automated mode: also choose the subregions' labels jointly on the global fit"),
     opt("auto.register_cells", Bool, false, "Automated mode: rank a subregion's labels after a local affine registration of its cell"),
+    opt("auto.opening_labels", Bool, false, "Automated mode: rank first the labels whose hole the subregion's voxels show"),
     // the hex stage (docs/hex.md)
     opt("hex.map.level", Integer, true, "Fixed octree subdivision level, 0 to 6 (none: chosen by the stopping rule)"),
     opt("hex.map.min_level", Integer, false, "Smallest level the stopping rule may choose (at most hex.map.max_level)"),

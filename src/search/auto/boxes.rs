@@ -148,6 +148,10 @@ fn rank_labels(run: &Run, subs: &[Subregion], labels_of: &[Vec<Primitive>], loca
         }
         let mut scored: Vec<(Primitive, f64)> = labels.iter().copied().zip(scores[si].iter().copied()).filter(|(p, _)| *p != Primitive::Null).collect();
         scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if aopts.opening_labels {
+            // stable: each part keeps the order of the fit
+            scored.sort_by_key(|(p, _)| !sub.openings.carries(*p));
+        }
         let may_be_null = labels.contains(&Primitive::Null);
         full.push(scored.iter().map(|(p, _)| *p).chain(may_be_null.then_some(Primitive::Null)).collect());
         lr.fits = scored.iter().map(|(p, f)| (p.name().to_string(), *f)).collect();

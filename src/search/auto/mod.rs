@@ -27,6 +27,7 @@
 pub mod boxes;
 mod global;
 mod local;
+pub mod openings;
 pub mod rank;
 pub mod volume;
 
@@ -119,11 +120,16 @@ pub struct AutoOptions {
     /// but recovers no more parts, BENCHMARKS.md "Label ranking with cell
     /// registration").
     pub register_cells: bool,
+    /// Rank first, among a subregion's feasible labels, those whose hole its
+    /// voxels show ([`openings`]: a hole through it along the label's axis, a
+    /// blind hole opening on the label's face, or no opening for the cube), then
+    /// the others, each part by the in-context fit (default true).
+    pub opening_labels: bool,
 }
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 5, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false }
+        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 5, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false, opening_labels: true }
     }
 }
 

@@ -117,7 +117,7 @@ fn joint_labels_find_the_assembly_whatever_the_local_ranking() {
 }
 
 fn subregion(cell: usize, fill: f64, genus: i64) -> Subregion {
-    Subregion { cell, lo: [0.0; 3], hi: [1.0; 3], fill, components: 1, cavities: 0, genus, empty: fill < AutoOptions::default().min_fill }
+    Subregion { cell, lo: [0.0; 3], hi: [1.0; 3], fill, components: 1, cavities: 0, genus, empty: fill < AutoOptions::default().min_fill, openings: Default::default() }
 }
 
 #[test]

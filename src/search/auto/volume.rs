@@ -6,7 +6,7 @@
 use super::super::generate::PreparedInput;
 use super::AutoOptions;
 use crate::error::{Error, Result};
-use crate::geometry::voxel::{betti, voxelize, VoxelVolume};
+use crate::geometry::voxel::{betti, majority, voxelize, VoxelVolume};
 use crate::geometry::{Aabb, VoxelGrid};
 use crate::mesh::TriMesh;
 use serde::Serialize;
@@ -94,6 +94,8 @@ pub struct Subregion {
     pub genus: i64,
     /// The subregion is (almost) empty: label null.
     pub empty: bool,
+    /// Its through and blind holes, read from its voxels.
+    pub openings: super::openings::Openings,
 }
 
 /// Split points of one axis from ratios (fractions summing to 1).
@@ -113,6 +115,10 @@ pub fn split_points(lo: f64, hi: f64, ratios: &[f64]) -> Vec<f64> {
 pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
     let mut out = Vec::new();
     let [nx, ny, nz] = vol.grid.dims;
+    // genus and openings are read from the majority-filtered voxels: surface noise
+    // leaves one-voxel bridges that count as tunnels (a noisy cube measured genus
+    // 3), the fill from the raw ones
+    let clean = majority(&vol.grid);
     for (k, zw) in zs.windows(2).enumerate() {
         for (j, yw) in ys.windows(2).enumerate() {
             for (i, xw) in xs.windows(2).enumerate() {
@@ -124,17 +130,19 @@ pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fil
                 let (z0, z1) = (r(2, lo[2], nz), r(2, hi[2], nz));
                 let dims = [x1.saturating_sub(x0).max(1), y1.saturating_sub(y0).max(1), z1.saturating_sub(z0).max(1)];
                 let mut g = VoxelGrid::empty(dims);
+                let mut gc = VoxelGrid::empty(dims);
                 for z in z0..z1 {
                     for y in y0..y1 {
                         for x in x0..x1 {
                             let v = vol.grid.occ[vol.grid.idx(x, y, z)];
                             let ix = g.idx(x - x0, y - y0, z - z0);
                             g.occ[ix] = v;
+                            gc.occ[ix] = clean.occ[clean.idx(x, y, z)];
                         }
                     }
                 }
                 let fill = g.count() as f64 / g.occ.len() as f64;
-                let (b0, b2, b1) = betti(&g);
+                let (b0, b2, b1) = betti(&gc);
                 out.push(Subregion {
                     cell: crate::polycube::cell_index(i, j, k),
                     lo,
@@ -144,6 +152,7 @@ pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fil
                     cavities: b2,
                     genus: b1,
                     empty: fill < min_fill,
+                    openings: super::openings::openings(&gc),
                 });
             }
         }

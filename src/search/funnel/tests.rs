@@ -52,7 +52,7 @@ fn result(cands: Vec<Candidate>, chosen: Option<usize>) -> PolycubeResult {
 fn local(cell: usize, empty: bool, fits: &[&str], kept: &[&str], verified: &[&str]) -> LocalResult {
     let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     LocalResult {
-        subregion: Subregion { cell, lo: [0.0; 3], hi: [1.0; 3], fill: if empty { 0.0 } else { 0.8 }, components: 1, cavities: 0, genus: 0, empty },
+        subregion: Subregion { cell, lo: [0.0; 3], hi: [1.0; 3], fill: if empty { 0.0 } else { 0.8 }, components: 1, cavities: 0, genus: 0, empty, openings: Default::default() },
         fits: fits.iter().enumerate().map(|(i, s)| (s.to_string(), 0.01 * (i + 1) as f64)).collect(),
         kept: names(kept),
         verified: names(verified),
