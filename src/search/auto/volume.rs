@@ -115,9 +115,10 @@ pub fn split_points(lo: f64, hi: f64, ratios: &[f64]) -> Vec<f64> {
 pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
     let mut out = Vec::new();
     let [nx, ny, nz] = vol.grid.dims;
-    // genus and openings are read from the majority-filtered voxels: surface noise
-    // leaves one-voxel bridges that count as tunnels (a noisy cube measured genus
-    // 3), the fill from the raw ones
+    // the genus is read from the majority-filtered voxels: surface noise leaves
+    // one-voxel bridges that count as tunnels (a noisy cube measured genus 3); the
+    // fill and the openings from the raw ones (the filter also opens a wall one
+    // voxel thin, like the ring around a small eye, which an opening must keep)
     let clean = majority(&vol.grid);
     for (k, zw) in zs.windows(2).enumerate() {
         for (j, yw) in ys.windows(2).enumerate() {
@@ -152,7 +153,7 @@ pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fil
                     cavities: b2,
                     genus: b1,
                     empty: fill < min_fill,
-                    openings: super::openings::openings(&gc),
+                    openings: super::openings::openings(&g),
                 });
             }
         }
