@@ -393,6 +393,35 @@ mod tests {
     }
 
     #[test]
+    fn the_majority_filter_drops_a_one_voxel_bridge_and_keeps_a_ring() {
+        // a square ring, walls 3 voxels thick around a 3x3 hole, 3 voxels tall
+        // (genus 1), with a one-voxel handle standing on its top (genus 2)
+        let mut g = VoxelGrid::empty([9, 9, 7]);
+        let mut set = |x: usize, y: usize, z: usize| {
+            let i = g.idx(x, y, z);
+            g.occ[i] = true;
+        };
+        for z in 1..4 {
+            for y in 0..9 {
+                for x in 0..9 {
+                    if !((3..6).contains(&x) && (3..6).contains(&y)) {
+                        set(x, y, z);
+                    }
+                }
+            }
+        }
+        set(2, 1, 4);
+        set(6, 1, 4);
+        for x in 2..7 {
+            set(x, 1, 5);
+        }
+        assert_eq!(betti(&g).2, 2);
+        let m = majority(&g);
+        assert_eq!(betti(&m).2, 1);
+        assert!(m.occ[m.idx(4, 1, 2)] && !m.occ[m.idx(4, 4, 2)] && !m.occ[m.idx(4, 1, 5)]);
+    }
+
+    #[test]
     fn betti_of_a_sealed_cavity() {
         // A sealed cavity: b2 = 1, b1 = 0.
         let mut g = VoxelGrid::empty([3, 3, 3]);
