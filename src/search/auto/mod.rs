@@ -4,10 +4,12 @@
 //!    into subregions ([`volume::subregions`]), each with its genus.
 //! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
 //!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
-//!    aligned bounding box into subregions, measure each one's genus, and take its
+//!    aligned bounding box into subregions, measure each one's genus (on
+//!    majority-filtered voxels) and openings ([`openings`]), and take its
 //!    feasible labels (empty -> null; genus 0 -> cube, the six BHC and the three THC; genus 1 ->
 //!    the three THC; genus >= 2 -> the box cannot hold the input).
-//! 3. Local stage: each subregion's feasible labels are ranked by their fit in the
+//! 3. Local stage: each subregion's feasible labels are ranked, those its openings
+//!    carry first (`opening_labels`), by their fit in the
 //!    box (the input against the box's assembly with that label in the cell and
 //!    cubes elsewhere, the cell's own term: [`rank::in_context_fits`]); the best labels
 //!    are diffused as single cells on the subregion's surface (the input's samples
