@@ -14,6 +14,9 @@ use serde::Serialize;
 /// The temporary volume of the aligned input, with the volume it is measured against.
 pub(super) struct TemporaryVolume {
     pub vol: VoxelVolume,
+    /// `vol`'s voxels majority-filtered ([`majority`]), computed once for every
+    /// box: the subregions' genus is read from them (see [`subregions`]).
+    pub clean: VoxelGrid,
     /// Voxels along the longest side.
     pub resolution: usize,
     /// The enclosed volume of the aligned input surface.
@@ -45,7 +48,8 @@ pub(super) fn measure(input: &PreparedInput, aopts: &AutoOptions) -> Result<Temp
             long
         )));
     }
-    Ok(TemporaryVolume { vol, resolution, surface_volume, bb })
+    let clean = majority(&vol.grid);
+    Ok(TemporaryVolume { vol, clean, resolution, surface_volume, bb })
 }
 
 /// The temporary volume misses the surface's volume by at most this fraction, or
@@ -111,15 +115,15 @@ pub fn split_points(lo: f64, hi: f64, ratios: &[f64]) -> Vec<f64> {
     v
 }
 
-/// Analyse the subregions of a volume split at `xs`, `ys`, `zs` (split points along each axis).
-pub fn subregions(vol: &VoxelVolume, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
+/// Analyse the subregions of a volume split at `xs`, `ys`, `zs` (split points along
+/// each axis). The genus is read from `clean`, the volume's majority-filtered voxels:
+/// surface noise leaves one-voxel bridges that count as tunnels (a noisy cube
+/// measured genus 3). The fill and the openings come from the raw voxels (the
+/// filter also opens a wall one voxel thin, like the ring around a small eye,
+/// which an opening must keep).
+pub fn subregions(vol: &VoxelVolume, clean: &VoxelGrid, xs: &[f64], ys: &[f64], zs: &[f64], min_fill: f64) -> Vec<Subregion> {
     let mut out = Vec::new();
     let [nx, ny, nz] = vol.grid.dims;
-    // the genus is read from the majority-filtered voxels: surface noise leaves
-    // one-voxel bridges that count as tunnels (a noisy cube measured genus 3); the
-    // fill and the openings from the raw ones (the filter also opens a wall one
-    // voxel thin, like the ring around a small eye, which an opening must keep)
-    let clean = majority(&vol.grid);
     for (k, zw) in zs.windows(2).enumerate() {
         for (j, yw) in ys.windows(2).enumerate() {
             for (i, xw) in xs.windows(2).enumerate() {
