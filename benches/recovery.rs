@@ -193,20 +193,28 @@ fn main() {
     let threads: usize = arg::<usize>(&args, "--threads").unwrap_or(1).max(1);
     // `--register-cells`: rank the labels by the in-context fit after the cell registration
     // `--opening-labels on|off`: rank first the labels whose hole the subregion shows
+    // `--axis-frames on|off`: also split with the grid's X along the input's Y and Z
     // `--local-keep N`: labels kept per subregion after the in-context fit
     let aopts = AutoOptions {
         register_cells: args.iter().any(|a| a == "--register-cells"),
         opening_labels: arg::<String>(&args, "--opening-labels").map_or(AutoOptions::default().opening_labels, |v| v == "on"),
+        axis_frames: arg::<String>(&args, "--axis-frames").map_or(AutoOptions::default().axis_frames, |v| v == "on"),
         local_keep: arg(&args, "--local-keep").unwrap_or(AutoOptions::default().local_keep),
         ..AutoOptions::default()
     };
     // the command line's options for `--generator` (learned: the embedded weights)
+    // `--warp-fit on|off`: fit and lay out after the quadratic registration
+    let warp_fit: Option<bool> = arg::<String>(&args, "--warp-fit").map(|v| v == "on");
     let load = || -> (Model, PolycubeOptions) {
-        match generator.as_str() {
+        let (model, mut opts) = match generator.as_str() {
             "learned" => (Model::default_model().expect("the embedded model"), PolycubeOptions::default()),
             "template" => (Model::template(), PolycubeOptions::template()),
             other => panic!("--generator must be learned or template, got '{other}'"),
+        };
+        if let Some(w) = warp_fit {
+            opts.warp_fit = w;
         }
+        (model, opts)
     };
     let mut jobs = Vec::new();
     for (gi, g) in COMPLEXITY_GROUPS.iter().enumerate() {

@@ -66,8 +66,10 @@ fn main() -> sddpm::Result<()> {
         println!("no box chosen");
         return Ok(());
     };
-    let bx = auto.boxes.iter().find(|b| b.dims == dims).expect("the chosen box is reported");
-    println!("\nchosen box {dims:?}, {} genus-consistent global candidates, best fit {:?}\n", bx.candidates, bx.best_fit);
+    let bx = auto.boxes.iter().find(|b| b.dims == dims && Some(&b.frame) == auto.chosen_frame.as_ref()).expect("the chosen box is reported");
+    // the box's subregions lie in its frame: the aligned mesh's points are turned into it
+    let frame = sddpm::search::auto::frames::FRAMES.iter().copied().find(|r| r.name() == bx.frame).unwrap_or(sddpm::polycube::orientation::AxisRotation::IDENTITY);
+    println!("\nchosen box {}, {} genus-consistent global candidates, best fit {:?}\n", bx.name(), bx.candidates, bx.best_fit);
     println!("| cell | colour | fill | genus | feasible labels (in-context fit) | kept | passed local verification |");
     println!("|---:|---|---:|---:|---|---|---|");
     for l in &bx.locals {
@@ -91,7 +93,7 @@ fn main() -> sddpm::Result<()> {
     let m = &pr.alignment.mesh;
     let mut by_cell: Vec<Vec<[u32; 3]>> = vec![Vec::new(); NUM_CELLS + 1];
     for t in &m.triangles {
-        let c = (0..3).map(|d| (0..3).map(|k| m.vertices[t[k] as usize][d]).sum::<f64>() / 3.0).collect::<Vec<_>>();
+        let c = frame.apply(std::array::from_fn(|d| (0..3).map(|k| m.vertices[t[k] as usize][d]).sum::<f64>() / 3.0));
         let cell = bx.locals.iter().map(|l| &l.subregion).find(|s| (0..3).all(|d| c[d] >= s.lo[d] - 1e-9 && c[d] <= s.hi[d] + 1e-9)).map_or(NUM_CELLS, |s| s.cell);
         by_cell[cell].push(*t);
     }

@@ -7,14 +7,19 @@
 //!   solid is congruent to the truth's;
 //! - the funnel's counts on a run whose loss stage is known beforehand: the
 //!   automated mode held to one cell-box (`--ratios 1:1:1`) cannot analyse a
-//!   two-cell part's box, so the truth is lost at the box stage.
+//!   two-cell part's box, so the truth is lost at the box stage;
+//! - a bent part recovered because the candidates are fitted and laid out after
+//!   the quadratic registration (`PolycubeOptions::warp_fit`), and lost
+//!   without it;
+//! - a part whose row of three cells is across its longest side, recovered in
+//!   the frame with the grid's X along the input's Y (`AutoOptions::axis_frames`).
 
 use sddpm::context::Context;
 use sddpm::diffusion::Model;
 use sddpm::error::NoProgress;
 use sddpm::pipeline::{generate_polycube, ContextRequest};
 use sddpm::search::auto::{AutoOptions, SplitRatios};
-use sddpm::search::evalset::{case_seed, Deformation, EvalCase, COMPLEXITY_GROUPS, REPORTED_FAMILIES};
+use sddpm::search::evalset::{case_seed, Deformation, EvalCase, Params, COMPLEXITY_GROUPS, REPORTED_FAMILIES};
 use sddpm::search::funnel::{classify, classify_error, counts, LossStage, Verdict};
 use sddpm::search::generate::PolycubeOptions;
 
@@ -24,12 +29,16 @@ const TEST_SEED: u64 = 4700;
 /// The funnel's verdict on the automated run of `request` over `case`'s mesh,
 /// with the command line's defaults.
 fn verdict(case: &EvalCase, request: &ContextRequest) -> Verdict {
+    verdict_with(case, request, &PolycubeOptions::default(), &AutoOptions::default())
+}
+
+/// [`verdict`] with the given options.
+fn verdict_with(case: &EvalCase, request: &ContextRequest, opts: &PolycubeOptions, aopts: &AutoOptions) -> Verdict {
     let model = Model::default_model().expect("the embedded model");
-    let opts = PolycubeOptions::default();
     let genus = case.mesh.check().genus.expect("the mesh's genus");
     assert_eq!(genus, case.genus);
-    match generate_polycube(&model, &case.mesh, genus, request, &opts, &AutoOptions::default(), &mut NoProgress) {
-        Ok((pr, rep, _)) => classify(&case.context, &pr, rep.as_ref(), &opts),
+    match generate_polycube(&model, &case.mesh, genus, request, opts, aopts, &mut NoProgress) {
+        Ok((pr, rep, _)) => classify(&case.context, &pr, rep.as_ref(), opts),
         Err(e) => classify_error(&e),
     }
 }
@@ -75,4 +84,39 @@ fn the_funnel_counts_a_truth_whose_box_was_never_analysed_at_the_box_stage() {
     assert_eq!(loss.stage, LossStage::Occupancy, "{loss:?}");
     assert!(matches!(loss.reason, "box not tried" | "no candidate"), "{loss:?}");
     assert_eq!(counts(&[v.clone(), v]), (0, [2, 0, 0, 0, 0]));
+}
+
+/// Seed 9300 (the tuning seed), simple case 3: three blind holes (3 cells,
+/// genus 0), bent. Fitted and laid out after the quadratic registration it is
+/// recovered; with the box map alone its truth reaches diffusion and fails TCV.
+#[test]
+fn a_bent_part_is_recovered_after_the_registration_and_lost_without_it() {
+    let case = EvalCase::generate(case_seed(9300, 0, 3), COMPLEXITY_GROUPS[0], Deformation::Bend).expect("the case");
+    let v = verdict(&case, &ContextRequest::Auto);
+    assert!(v.recovered, "{} not recovered with the registration: {:?}", case.context, v.loss);
+    let rigid = PolycubeOptions { warp_fit: false, ..PolycubeOptions::default() };
+    let v = verdict_with(&case, &ContextRequest::Auto, &rigid, &AutoOptions::default());
+    assert!(!v.recovered, "{} recovered without the registration", case.context);
+}
+
+/// A row of three through holes beside a row of three cubes (3 x 2 x 1 cells,
+/// genus 3), scaled 0.6 along the row and 1.5 across it: its longest side is
+/// across the row, so the aligned frame's three-cell boxes cut the wrong side;
+/// with the other frames the row is found along the input's Y.
+#[test]
+fn a_row_across_the_longest_side_is_found_in_another_frame() {
+    let truth = Context::parse("THC+Z,THC+Z,THC+Z,cube,cube,cube,null,null,null,null,null,null").unwrap();
+    let mut mesh = sddpm::polycube::boundary(&truth.assemble()).to_trimesh();
+    for v in mesh.vertices.iter_mut() {
+        *v = [0.6 * v[0], 1.5 * v[1], v[2]];
+    }
+    let case = EvalCase { seed: 0, group: "medium", family: Deformation::Aniso, context: truth, genus: 3, cells: 6, params: Params(Vec::new()), attempts: 1, mesh };
+    let with = AutoOptions { axis_frames: true, ..AutoOptions::default() };
+    let v = verdict_with(&case, &ContextRequest::Auto, &PolycubeOptions::default(), &with);
+    assert!(v.recovered, "not recovered with the other frames: {:?}", v.loss);
+    let without = AutoOptions { axis_frames: false, ..AutoOptions::default() };
+    let v = verdict_with(&case, &ContextRequest::Auto, &PolycubeOptions::default(), &without);
+    // (the aligned frame's 3 x 2 x 1 box cuts the long side into thirds: its
+    // subregions show no row of holes)
+    assert!(!v.recovered, "recovered in the aligned frame alone");
 }

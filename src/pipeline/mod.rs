@@ -428,7 +428,7 @@ fn prepare_candidate_input(pr: &mut PolycubeResult, opts: &PolycubeOptions, i: u
     const RELAYOUT_SEED: u64 = 0x9e37;
     const RELAYOUT_STREAM: u64 = 0xfa11;
     let mut rng = crate::geometry::rng::seeded_rng(opts.seed ^ RELAYOUT_SEED, RELAYOUT_STREAM);
-    match crate::search::inference::prepare(&pr.samples, &c.context, c.axis_rotation, 0.0, &mut rng) {
+    match crate::search::inference::prepare(&pr.samples, &c.context, c.axis_rotation, c.warp.as_ref(), 0.0, &mut rng) {
         Ok(inp) => {
             pr.candidates[i].input = Some(inp);
             true

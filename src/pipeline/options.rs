@@ -105,6 +105,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("polycube.max_fit", Number, false, "Pre-check: largest geometric fit score (squared cell units) a candidate may have to be diffused"),
     opt("polycube.relative_fit", Number, false, "Pre-check: candidates within this factor of the input's best fit are diffused even above max_fit (0: off)"),
     opt("polycube.relative_fit_cap", Number, false, "The relative fit rule admits no fit above this"),
+    opt("polycube.warp_fit", Bool, false, "Pre-check: also fit each candidate after a quadratic registration of the input onto its polycube, and lay the input out after it when it fits better"),
     opt("polycube.neighbour_fit_ratio", Number, false, "Pre-check of a caller's context: refused when relabelling one cell fits the input this many times better (0: off)"),
     opt("polycube.visible_retry", Bool, false, "A candidate that fails verification is diffused again with the visible prior and verified with the visible coverage"),
     opt("polycube.oversampling", Integer, false, "Surface samples drawn from the input, shared by every candidate"),
@@ -122,6 +123,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("auto.joint_labels", Bool, false, "Automated mode: also choose the subregions' labels jointly on the global fit"),
     opt("auto.register_cells", Bool, false, "Automated mode: rank a subregion's labels after a local affine registration of its cell"),
     opt("auto.opening_labels", Bool, false, "Automated mode: rank first the labels whose hole the subregion's voxels show"),
+    opt("auto.axis_frames", Bool, false, "Automated mode: also try the boxes with three cells along X with the grid's X along the input's Y and Z"),
     // the hex stage (docs/hex.md)
     opt("hex.map.level", Integer, true, "Fixed octree subdivision level, 0 to 6 (none: chosen by the stopping rule)"),
     opt("hex.map.min_level", Integer, false, "Smallest level the stopping rule may choose (at most hex.map.max_level)"),

@@ -159,10 +159,11 @@ pub fn classify(truth: &Context, result: &PolycubeResult, report: Option<&AutoRe
 }
 
 /// Names of a candidate's labels in `b`'s cells agree with the box's kept labels
-/// (and it has nothing outside them): the candidate may have come from `b`.
+/// (and it has nothing outside them), in the box's frame: the candidate may have
+/// come from `b`.
 fn from_box(c: &Candidate, b: &BoxResult) -> bool {
     let cells: Vec<usize> = b.locals.iter().map(|l| l.subregion.cell).collect();
-    (0..c.context.labels.len()).all(|n| match cells.iter().position(|&x| x == n) {
+    c.rotation == b.frame && (0..c.context.labels.len()).all(|n| match cells.iter().position(|&x| x == n) {
         None => c.context.labels[n] == Primitive::Null,
         Some(i) => b.locals[i].kept.iter().any(|k| k == c.context.labels[n].name()),
     })
@@ -175,10 +176,20 @@ fn follow(p: &Context, result: &PolycubeResult, report: &AutoReport) -> (u8, Ver
         return (0, Verdict::lost(LossStage::Occupancy, "box refused", "nothing occupied".into()));
     };
     let dims: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a]);
-    let dn = format!("{}x{}x{}", dims[0], dims[1], dims[2]);
-    let Some(b) = report.boxes.iter().find(|b| b.dims == dims) else {
-        return (0, Verdict::lost(LossStage::Occupancy, "box not tried", format!("box {dn} of {p} was not analysed")));
-    };
+    // the box of these dims in each frame it was analysed in; the furthest counts
+    let mut best: Option<(u8, Verdict)> = None;
+    for b in report.boxes.iter().filter(|b| b.dims == dims) {
+        let v = follow_box(p, b, result, report);
+        if best.as_ref().is_none_or(|(k, _)| v.0 > *k) {
+            best = Some(v);
+        }
+    }
+    best.unwrap_or_else(|| (0, Verdict::lost(LossStage::Occupancy, "box not tried", format!("box {}x{}x{} of {p} was not analysed", dims[0], dims[1], dims[2]))))
+}
+
+/// How far the placement `p` got through one box's record `b` ([`follow`]).
+fn follow_box(p: &Context, b: &BoxResult, result: &PolycubeResult, report: &AutoReport) -> (u8, Verdict) {
+    let dn = b.name();
     if b.locals.is_empty() {
         return (1, Verdict::lost(LossStage::Occupancy, "box refused", format!("box {dn} of {p}: {}", b.refused.clone().unwrap_or_default())));
     }
@@ -214,9 +225,10 @@ fn follow(p: &Context, result: &PolycubeResult, report: &AutoReport) -> (u8, Ver
         return (4, Verdict::lost(LossStage::LabelRanking, "too many combinations", format!("box {dn} of {p}: {}", b.refused.clone().unwrap_or_default())));
     }
     let diffused = |c: &&Candidate| matches!(c.stage, Stage::Gocc | Stage::Tcv | Stage::Verified);
-    let tried = report.chosen_box == Some(dims) || result.candidates.iter().filter(diffused).any(|c| from_box(c, b));
+    let chosen_box = report.boxes.iter().find(|x| Some(x.dims) == report.chosen_box && Some(&x.frame) == report.chosen_frame.as_ref());
+    let tried = chosen_box.is_some_and(|x| std::ptr::eq(x, b)) || result.candidates.iter().filter(diffused).any(|c| from_box(c, b));
     if !tried {
-        let chosen = report.chosen_box.map(|d| format!("{}x{}x{}", d[0], d[1], d[2])).unwrap_or_else(|| "none".into());
+        let chosen = chosen_box.map(|x| x.name()).unwrap_or_else(|| "none".into());
         return match &b.refused {
             Some(r) => (5, Verdict::lost(LossStage::Occupancy, "box passed over", format!("box {dn} of {p} passed over: {r}"))),
             None => (5, Verdict::lost(LossStage::Occupancy, "box not tried", format!("box {dn} of {p} not tried (best fit {:.4}); last box tried {chosen}", b.best_fit_common.unwrap_or(f64::NAN)))),

@@ -67,8 +67,11 @@ pub struct InferenceInput {
     pub context: Context,
     pub frame: BoxFrame,
     pub map: BoxMap,
-    /// [3, 64, 96] tensor x'_T.
+    /// [3, 64, 96] tensor x'_T: the samples after `map` and then `warp`.
     pub tensor: Vec<f32>,
+    /// The registration applied after the box map (grid units), if any; the
+    /// slots' samples and `map` are the input's own positions.
+    pub warp: Option<crate::search::generate::warp::Warp>,
     /// For each tensor slot (cell n, point p -> n * 512 + p): the input surface sample
     /// (in the aligned frame) it came from; None in null cells.
     pub slots: Vec<Option<SurfaceSample>>,
@@ -161,6 +164,7 @@ pub fn prepare(
     samples: &[SurfaceSample],
     ctx: &Context,
     rotation: AxisRotation,
+    warp: Option<&crate::search::generate::warp::Warp>,
     min_occupied_fraction: f64,
     rng: &mut ChaCha8Rng,
 ) -> Result<InferenceInput> {
@@ -181,7 +185,14 @@ pub fn prepare(
     }
     let map = BoxMap { rotation, src_lo: slo, src_hi: shi, dst_lo: dlo, dst_hi: dhi };
     let mut per_cell: Vec<Vec<usize>> = vec![Vec::new(); NUM_CELLS];
-    let mapped: Vec<[f64; 3]> = samples.iter().map(|s| map.forward(s.point)).collect();
+    // the tensor holds the samples after the registration, if any (in grid units)
+    let mapped: Vec<[f64; 3]> = samples
+        .iter()
+        .map(|s| {
+            let q = map.forward(s.point);
+            warp.map_or(q, |w| frame.to_normalised(w.apply(frame.to_grid(q))))
+        })
+        .collect();
     for (i, q) in mapped.iter().enumerate() {
         per_cell[cell_of(&frame, glo, ghi, &ctx.labels, *q)].push(i);
     }
@@ -230,6 +241,7 @@ pub fn prepare(
         frame,
         map,
         tensor: layout(&cells),
+        warp: warp.copied(),
         slots,
         occupancy: Occupancy { area_fraction, in_empty_cells, starved_cells },
     })
@@ -258,7 +270,7 @@ mod tests {
         }
         let mut rng = seeded_rng(1, 0);
         let samples = sample_surface(&m, DEFAULT_OVERSAMPLING, &mut rng);
-        let inp = prepare(&samples, &ctx, AxisRotation::IDENTITY, 0.25, &mut rng).unwrap();
+        let inp = prepare(&samples, &ctx, AxisRotation::IDENTITY, None, 0.25, &mut rng).unwrap();
         assert_eq!(inp.tensor.len(), TENSOR_LEN);
         assert!(inp.occupancy.in_empty_cells < 1e-12);
         assert!(inp.occupancy.starved_cells.is_empty());
@@ -288,7 +300,7 @@ mod tests {
         }
         // A context that leaves a surface-carrying cell empty is caught by the pre-check.
         let wrong = Context::parse("THC+Z,0,0,0,BHC+X,0,0,0,0,0,0,0").unwrap();
-        let w = prepare(&samples, &wrong, AxisRotation::IDENTITY, 0.25, &mut rng);
+        let w = prepare(&samples, &wrong, AxisRotation::IDENTITY, None, 0.25, &mut rng);
         let in_empty = w.unwrap().occupancy.in_empty_cells;
         assert!(in_empty > 0.15, "{in_empty}");
         // The map round-trips.

@@ -444,7 +444,7 @@ mod tests {
         let mesh = crate::polycube::boundary(&ctx.assemble()).to_trimesh();
         let mut rng = seeded_rng(7, 0);
         let samples = crate::geometry::sample_surface(&mesh, 20_000, &mut rng);
-        let inp = prepare(&samples, &ctx, AxisRotation::IDENTITY, 0.0, &mut rng).unwrap();
+        let inp = prepare(&samples, &ctx, AxisRotation::IDENTITY, None, 0.0, &mut rng).unwrap();
         let visible = verify(&inp.tensor, &ctx, &inp.frame, &VerifyOptions { visible_coverage: true, ..Default::default() });
         assert!(visible.passed, "{:?}", visible.reason);
         for c in visible.cells.iter().filter(|c| c.label != "null") {

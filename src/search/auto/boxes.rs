@@ -25,37 +25,64 @@ pub(super) struct BoxWork {
     pub joint_found: HashSet<[Primitive; NUM_CELLS]>,
     /// The local stage's single-cell diffusions.
     pub local_jobs: Vec<LocalJob>,
+    /// The frame (index into the runs, [`super::frames::FRAMES`]) the box splits.
+    pub frame: usize,
 }
 
-/// The boxes tried: the caller's split, or every box of 1..3 x 1..2 x 1..2 equal
-/// cells, fewest cells first.
-pub(super) fn box_shapes(ratios: Option<&SplitRatios>) -> Vec<SplitRatios> {
+/// The boxes tried, each with its frame (an index of [`super::frames::FRAMES`]):
+/// the caller's split, or every box of 1..3 x 1..2 x 1..2 equal cells of the
+/// aligned frame and, in each of the `frames - 1` other frames, those with three
+/// cells along X (the others are boxes of the aligned frame turned); fewest cells
+/// first, a box's other frames right after it.
+pub(super) fn box_shapes(ratios: Option<&SplitRatios>, frames: usize) -> Vec<(usize, SplitRatios)> {
     match ratios {
-        Some(r) => vec![r.clone()],
+        Some(r) => vec![(0, r.clone())],
         None => {
             let mut v = Vec::new();
             for nx in 1..=3 {
                 for ny in 1..=2 {
                     for nz in 1..=2 {
-                        v.push(SplitRatios::equal(nx, ny, nz));
+                        for f in 0..frames.max(1) {
+                            if f == 0 || nx == 3 {
+                                v.push((f, SplitRatios::equal(nx, ny, nz)));
+                            }
+                        }
                     }
                 }
             }
-            v.sort_by_key(|r| {
+            v.sort_by_key(|(f, r)| {
                 let d = r.dims();
-                (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]))
+                (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]), *f)
             });
             v
         }
     }
 }
 
-/// Analyse every box of `shapes` ([`analyse_box`]), recording each in `report`.
-pub(super) fn analyse_boxes(run: &Run, shapes: &[SplitRatios], report: &mut AutoReport, progress: &mut dyn Progress) -> Result<Vec<BoxWork>> {
+/// Put the boxes and their records in the order of [`box_shapes`] (fewest cells
+/// first, a box's other frames right after it), which [`super::rank::box_order`]
+/// reads as coarsest first.
+pub(super) fn sort_boxes(boxes: &mut Vec<BoxWork>, records: &mut Vec<BoxResult>) {
+    let key = |w: &BoxWork, r: &BoxResult| {
+        let d = r.dims;
+        (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]), w.frame)
+    };
+    let mut pairs: Vec<(BoxWork, BoxResult)> = boxes.drain(..).zip(records.drain(..)).collect();
+    pairs.sort_by_key(|(w, r)| key(w, r));
+    for (w, r) in pairs {
+        boxes.push(w);
+        records.push(r);
+    }
+}
+
+/// Analyse every box of `shapes` in its frame's run ([`analyse_box`]), recording
+/// each in `report`; progress goes through `span`.
+pub(super) fn analyse_boxes(runs: &[Run], shapes: &[(usize, SplitRatios)], span: (f64, f64), report: &mut AutoReport, progress: &mut dyn Progress) -> Result<Vec<BoxWork>> {
     let mut boxes = Vec::with_capacity(shapes.len());
-    for (bi, r) in shapes.iter().enumerate() {
-        check_progress(progress, 0.05 + 0.25 * bi as f64 / shapes.len() as f64, "subregions")?;
-        let (br, work) = analyse_box(run, r);
+    for (bi, (f, r)) in shapes.iter().enumerate() {
+        check_progress(progress, span.0 + (span.1 - span.0) * bi as f64 / shapes.len() as f64, "subregions")?;
+        let (br, mut work) = analyse_box(&runs[*f], r);
+        work.frame = *f;
         report.boxes.push(br);
         boxes.push(work);
     }
@@ -71,8 +98,8 @@ fn analyse_box(run: &Run, r: &SplitRatios) -> (BoxResult, BoxWork) {
     let ys = split_points(bb.min[1], bb.max[1], &r.y);
     let zs = split_points(bb.min[2], bb.max[2], &r.z);
     let subs = subregions(&run.volume.vol, &run.volume.clean, &xs, &ys, &zs, run.aopts.min_fill);
-    let mut br = BoxResult { dims: r.dims(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, joint_candidates: 0, refused: None };
-    let mut work = BoxWork { cands: Vec::new(), joint: None, joint_found: HashSet::new(), local_jobs: Vec::new() };
+    let mut br = BoxResult { dims: r.dims(), frame: run.frame.name(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, joint_candidates: 0, refused: None };
+    let mut work = BoxWork { cands: Vec::new(), joint: None, joint_found: HashSet::new(), local_jobs: Vec::new(), frame: 0 };
     let labels_of = match subs.iter().map(|sub| feasible(sub, run.aopts.null_fill)).collect::<std::result::Result<Vec<_>, String>>() {
         Ok(l) => l,
         Err(e) => {

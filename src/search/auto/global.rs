@@ -4,7 +4,7 @@
 //! in one batch and verified, until a box yields a verified polycube or
 //! `max_boxes` were tried.
 
-use super::super::generate::{diffuse_and_verify, lay_out, limit_fit, precheck, without_fit_limit, Candidate, PolycubeTimings, Stage};
+use super::super::generate::{diffuse_and_verify, lay_out, limit_fit, precheck_in, without_fit_limit, Candidate, PolycubeTimings, Stage};
 use super::boxes::BoxWork;
 use super::{local, AutoReport, Run};
 use crate::context::Context;
@@ -15,9 +15,9 @@ use crate::error::{Progress, Result};
 /// polycube; the candidates of the boxes tried, or, when every box was passed
 /// over, theirs (the main job can still mesh the best-fitting of them, see
 /// pipeline::fallback_order).
-pub(super) fn try_boxes(run: &Run, model: &Model, boxes: &mut [BoxWork], order: &[usize], report: &mut AutoReport, progress: &mut dyn Progress, timings: &mut PolycubeTimings) -> Result<Vec<Candidate>> {
+pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], order: &[usize], report: &mut AutoReport, progress: &mut dyn Progress, timings: &mut PolycubeTimings) -> Result<Vec<Candidate>> {
     let best_overall = report.boxes.iter().filter_map(|b| b.best_fit).fold(f64::INFINITY, f64::min);
-    let max_boxes = run.aopts.max_boxes.max(1);
+    let max_boxes = runs[0].aopts.max_boxes.max(1);
     let mut all_global: Vec<Candidate> = Vec::new();
     let mut attempt = 0usize;
     let mut passed_over: Vec<Candidate> = Vec::new();
@@ -25,6 +25,7 @@ pub(super) fn try_boxes(run: &Run, model: &Model, boxes: &mut [BoxWork], order: 
         if attempt >= max_boxes {
             break;
         }
+        let run = &runs[boxes[cb].frame];
         // A box none of whose candidates the fit limit would admit (they all fit far
         // worse than another box's best) is passed over without using up an attempt
         // or running its local stage.
@@ -40,6 +41,7 @@ pub(super) fn try_boxes(run: &Run, model: &Model, boxes: &mut [BoxWork], order: 
         let span = 0.35 + 0.6 * attempt as f64 / max_boxes as f64;
         attempt += 1;
         report.chosen_box = Some(report.boxes[cb].dims);
+        report.chosen_frame = Some(report.boxes[cb].frame.clone());
         // Local single-cell diffusion + verification for this box's kept labels (one batch).
         local::local_stage(run, model, &mut boxes[cb], &mut report.boxes[cb].locals, &mut |f: f64, s: &str| progress.report(span + 0.2 * f, s), timings)?;
         let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / max_boxes as f64, s);
@@ -55,11 +57,12 @@ pub(super) fn try_boxes(run: &Run, model: &Model, boxes: &mut [BoxWork], order: 
 
 /// The occupancy pre-check of a box's first `max_global` candidates without the
 /// fit limit (the verdicts, reused by the global stage for the contexts the local
-/// filter keeps), and the same with the fit limit applied.
+/// filter keeps), and the same with the fit limit applied. Candidates are checked
+/// against the aligned input in the box's frame.
 fn probe(run: &Run, cands: &[(Context, f64)], best_overall: f64) -> Result<(Vec<Candidate>, Vec<Candidate>)> {
     let mut probe: Vec<Candidate> = Vec::new();
     for (ctx, _) in cands.iter().take(run.aopts.max_global.max(1)) {
-        probe.extend(precheck(run.input, ctx, &without_fit_limit(&run.global))?);
+        probe.extend(precheck_in(run.aligned, ctx, &[run.frame], &without_fit_limit(&run.global))?);
     }
     let prechecked = probe.clone();
     limit_fit(&mut probe, &run.global, best_overall);
@@ -75,13 +78,13 @@ fn global_stage(run: &Run, model: &Model, cands: &[(Context, f64)], prechecked: 
     for (ctx, _) in cands.iter().take(run.aopts.max_global.max(1)) {
         let known: Vec<Candidate> = prechecked.iter().filter(|c| c.context.labels == ctx.labels).cloned().collect();
         if known.is_empty() {
-            global.extend(precheck(run.input, ctx, &without_fit_limit(o))?);
+            global.extend(precheck_in(run.aligned, ctx, &[run.frame], &without_fit_limit(o))?);
         } else {
             global.extend(known);
         }
     }
     limit_fit(&mut global, o, best_overall);
-    lay_out(run.input, &mut global, o)?;
+    lay_out(run.aligned, &mut global, o)?;
     diffuse_and_verify(model, &mut global, run.opts, progress, timings)?;
     Ok(global)
 }

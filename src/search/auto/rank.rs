@@ -14,13 +14,14 @@ use crate::geometry::SurfaceSample;
 use crate::polycube::orientation::AxisRotation;
 use crate::polycube::{Primitive, NUM_CELLS};
 
-/// The global fit of every candidate of every box (cheap): each box's candidates
+/// The global fit of every candidate of every box from `from` on (cheap): each box's candidates
 /// get their worst cell's fit and are put in ranking order (see below), with the
 /// box's best fit in the box's cell units and in the common unit of
 /// [`box_scale`]; with `joint_labels`, the joint label search adds its contexts.
-pub(super) fn rank_candidates(run: &Run, boxes: &mut [BoxWork], report: &mut AutoReport) {
-    let fit_sub = run.fit_sub;
-    for (bi, work) in boxes.iter_mut().enumerate() {
+pub(super) fn rank_candidates(runs: &[Run], boxes: &mut [BoxWork], from: usize, report: &mut AutoReport) {
+    for (bi, work) in boxes.iter_mut().enumerate().skip(from) {
+        let run = &runs[work.frame];
+        let fit_sub = run.fit_sub;
         // Thousands of candidates for a genus-0 part (a box: 22,000 over the 12
         // boxes): the fits are independent, so they run on every core. (Ranking them
         // on a coarse fit first was tried and lost a complex part's true solid:
@@ -75,8 +76,8 @@ fn add_joint_candidates(run: &Run, work: &mut BoxWork, keyed: &mut Vec<((Context
 }
 
 /// The order in which the boxes with candidates are tried: the coarsest box whose
-/// best fit (common unit) is not beaten by a finer one by `finer_box_factor`, then
-/// the rest by that fit. No box with a candidate is an error naming why the boxes
+/// best fit (common unit) is not beaten by a finer one by `finer_box_factor` (the
+/// same box in another frame only needs a better fit), then the rest by that fit. No box with a candidate is an error naming why the boxes
 /// were refused, with suggested splitting ratios.
 pub(super) fn box_order(run: &Run, boxes: &[BoxWork], report: &AutoReport) -> Result<Vec<usize>> {
     let common = |bi: usize| report.boxes[bi].best_fit_common.unwrap_or(f64::INFINITY);
@@ -86,7 +87,8 @@ pub(super) fn box_order(run: &Run, boxes: &[BoxWork], report: &AutoReport) -> Re
             match order.first() {
                 None => order.push(bi),
                 Some(&c) => {
-                    if common(bi) < run.aopts.finer_box_factor * common(c) {
+                    let factor = if report.boxes[bi].dims == report.boxes[c].dims { 1.0 } else { run.aopts.finer_box_factor };
+                    if common(bi) < factor * common(c) {
                         order.insert(0, bi);
                     } else {
                         order.push(bi);
@@ -101,7 +103,7 @@ pub(super) fn box_order(run: &Run, boxes: &[BoxWork], report: &AutoReport) -> Re
         debug_assert_eq!(order[0], first);
     }
     if order.is_empty() {
-        let mut why: Vec<String> = report.boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}x{}x{}: {r}", b.dims[0], b.dims[1], b.dims[2]))).collect();
+        let mut why: Vec<String> = report.boxes.iter().filter_map(|b| b.refused.as_ref().map(|r| format!("{}: {r}", b.name()))).collect();
         why.truncate(6);
         let bb = &run.volume.bb;
         return Err(Error::VerificationFailed(format!(

@@ -204,6 +204,8 @@ fn refused_candidate(names: &str, stage: crate::search::generate::Stage, fit: f6
         fidelity: None,
         score: None,
         visible_retry: false,
+        warp: None,
+        warped: false,
         input: None,
         output: None,
     }
@@ -240,6 +242,7 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
     };
     let bx = |refused: Option<&str>| BoxResult {
         dims: [2, 1, 1],
+        frame: "+x+y+z".into(),
         ratios: SplitRatios::equal(2, 1, 1),
         locals: vec![local(0, &[]), local(1, &["cube"])],
         candidates: 4,
@@ -256,6 +259,7 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
         volume_relative_error: 0.0,
         boxes: vec![bx(refused)],
         no_candidate: None,
+        chosen_frame: chosen.map(|_| "+x+y+z".into()),
         chosen_box: chosen,
     };
     // the box was tried: its local failures, the nearest candidates, what to give

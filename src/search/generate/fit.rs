@@ -56,36 +56,10 @@ pub fn fit_score(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotatio
 /// The per-cell values of [`fit_score_scaled`] (NaN for unoccupied cells, infinite
 /// when the mapping or a cell's input is empty).
 pub fn fit_score_cells(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], scale: [f64; 3]) -> [f64; NUM_CELLS] {
-    use kiddo::{ImmutableKdTree, SquaredEuclidean};
     let Some((grid_in, cells_in)) = fit_points(samples, ctx, rotation, scale) else { return [f64::INFINITY; NUM_CELLS] };
-    if target.is_empty() {
-        return [f64::INFINITY; NUM_CELLS];
-    }
     let tgt: Vec<[f64; 3]> = target.iter().map(|t| std::array::from_fn(|a| t.0[a] * scale[a])).collect();
-    let t_in = ImmutableKdTree::new_from_slice(&grid_in).expect("non-empty");
-    let t_tg = ImmutableKdTree::new_from_slice(&tgt).expect("non-empty");
-    let f = fit_penalty;
-    let mut sum_in = [0.0f64; NUM_CELLS];
-    let mut n_in = [0usize; NUM_CELLS];
-    for (p, &c) in grid_in.iter().zip(&cells_in) {
-        sum_in[c] += f(t_tg.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
-        n_in[c] += 1;
-    }
-    let mut sum_tg = [0.0f64; NUM_CELLS];
-    let mut n_tg = [0usize; NUM_CELLS];
-    for (p, (_, c)) in tgt.iter().zip(target) {
-        sum_tg[*c] += f(t_in.query(p).nearest_one::<SquaredEuclidean<f64>>().execute().distance);
-        n_tg[*c] += 1;
-    }
-    let mut cells = [f64::NAN; NUM_CELLS];
-    for c in 0..NUM_CELLS {
-        if n_tg[c] == 0 {
-            continue;
-        }
-        let a = if n_in[c] > 0 { sum_in[c] / n_in[c] as f64 } else { f64::INFINITY };
-        cells[c] = 0.5 * (a + sum_tg[c] / n_tg[c] as f64);
-    }
-    cells
+    let tgt_cells: Vec<usize> = target.iter().map(|t| t.1).collect();
+    super::warp::cell_fits(&grid_in, &cells_in, &tgt, &tgt_cells)
 }
 
 /// The input samples as [`fit_score_cells`] compares them: rotated by `rotation`,
@@ -137,8 +111,9 @@ pub fn worst_and_mean(cells: &[f64; NUM_CELLS]) -> (f64, f64) {
 
 /// The best-fitting one-cell alternative of a candidate's context: every occupied cell
 /// given every other non-null label whose assembly stays valid with the same genus,
-/// fitted under the candidate's orientation ([`fit_score`], the same box since the
-/// occupancy is unchanged). Returns (cell, label, fit) of the best one, or None when
+/// fitted under the candidate's orientation as the candidate was (the same box since
+/// the occupancy is unchanged; after the registration when the candidate's fit was,
+/// [`super::warp::candidate_fit`]). Returns (cell, label, fit) of the best one, or None when
 /// the context has no such alternative.
 pub fn best_neighbour(input: &PreparedInput, c: &Candidate) -> Option<(usize, Primitive, f64)> {
     let genus = c.context.validity().genus?;
@@ -158,7 +133,7 @@ pub fn best_neighbour(input: &PreparedInput, c: &Candidate) -> Option<(usize, Pr
     }
     use rayon::prelude::*;
     alts.par_iter()
-        .map(|(n, l, w)| (*n, *l, fit_score(fit_sub, w, c.axis_rotation, &polycube_samples(w, FIT_SAMPLES))))
+        .map(|(n, l, w)| (*n, *l, super::warp::candidate_fit(fit_sub, w, c.axis_rotation, &polycube_samples(w, FIT_SAMPLES), c.warped).0 .0))
         .min_by(|a, b| a.2.total_cmp(&b.2))
 }
 

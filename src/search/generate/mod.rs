@@ -23,10 +23,11 @@ mod diffuse;
 mod fit;
 mod precheck;
 pub mod register;
+pub mod warp;
 #[cfg(test)]
 mod tests;
 
-pub use precheck::{PRECHECK_SAMPLES, precheck, lay_out, without_fit_limit, limit_fit};
+pub use precheck::{PRECHECK_SAMPLES, precheck, precheck_in, lay_out, without_fit_limit, limit_fit};
 pub use fit::{FIT_TAU, FIT_SAMPLES, polycube_samples, fit_points, fit_score, fit_score_cells, fit_score_scaled, worst_and_mean, best_neighbour, refuse_worse_than_neighbours};
 pub use diffuse::{diffuse_and_verify, generate_from_contexts, finish};
 
@@ -76,6 +77,12 @@ pub struct PolycubeOptions {
     /// worst fit of a right context on the test meshes, 0.28 for the eight's two
     /// through holes, and the 0.67 of a blind hole asked of a plain box).
     pub relative_fit_cap: f64,
+    /// Pre-check: measure each candidate's fit after a quadratic registration of
+    /// the box-mapped input onto its polycube as well ([`warp`]), keep the lower of
+    /// the two fits, and lay the input out for diffusion after the registration
+    /// when it fits better (default true: a bent, twisted or tapered part fits its
+    /// right context again, a missing or misplaced hole still does not).
+    pub warp_fit: bool,
     /// Pre-check of a caller's context (user-guided mode): refused when changing one
     /// occupied cell's label to another of the same genus fits the input this many
     /// times better ([`best_neighbour`]; default 1.5, 0 turns it off). Measured
@@ -116,6 +123,7 @@ impl Default for PolycubeOptions {
             max_fit: 0.05,
             relative_fit: 2.0,
             relative_fit_cap: 0.5,
+            warp_fit: true,
             neighbour_fit_ratio: 1.5,
             visible_retry: false,
             oversampling: DEFAULT_OVERSAMPLING,
@@ -200,6 +208,14 @@ pub struct Candidate {
     /// ([`PolycubeOptions::visible_retry`]); its output and report are that run's.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub visible_retry: bool,
+    /// The quadratic registration of the input onto this candidate's polycube
+    /// ([`warp`]) that its fit was measured after and its inference input is laid
+    /// out with; None: the box map alone.
+    #[serde(skip)]
+    pub warp: Option<warp::Warp>,
+    /// Whether the fit and the inference input are those after the registration.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub warped: bool,
     #[serde(skip)]
     pub input: Option<InferenceInput>,
     /// Diffusion output [3, 64, 96].

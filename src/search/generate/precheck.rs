@@ -14,6 +14,14 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
         OrientationSearch::SignFlips => rotations()[..4].to_vec(),
         OrientationSearch::All => rotations().to_vec(),
     };
+    precheck_in(input, ctx, &rots, opts)
+}
+
+/// [`precheck`] over the rotations `rots` of the context against the aligned
+/// input (`opts.orientations` is not read): the automated mode's boxes found
+/// with the grid's X along another axis of the input check their candidates in
+/// that one rotation.
+pub fn precheck_in(input: &PreparedInput, ctx: &Context, rots: &[AxisRotation], opts: &PolycubeOptions) -> Result<Vec<Candidate>> {
     let sub = &input.samples[..input.samples.len().min(PRECHECK_SAMPLES)];
     let mut scored: Vec<(usize, Occupancy)> = rots
         .iter()
@@ -33,18 +41,21 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
     // Among the orientations the occupancy allows, rank by geometric fit.
     let fit_sub = &input.samples[..input.samples.len().min(FIT_SAMPLES)];
     let target = polycube_samples(ctx, FIT_SAMPLES);
-    let mut ranked: Vec<(usize, Occupancy, (f64, f64))> = scored
+    let fit = |r: AxisRotation| super::warp::candidate_fit(fit_sub, ctx, r, &target, opts.warp_fit);
+    // (rotation index, occupancy, (worst, mean) fit, registration)
+    type Ranked = (usize, Occupancy, (f64, f64), Option<super::warp::Warp>);
+    let mut ranked: Vec<Ranked> = scored
         .into_iter()
         .map(|(k, o)| {
-            let f = if passes(&o) { worst_and_mean(&fit_score_cells(fit_sub, ctx, rots[k], &target, [1.0; 3])) } else { (f64::INFINITY, f64::INFINITY) };
-            (k, o, f)
+            let (f, w) = if passes(&o) { fit(rots[k]) } else { ((f64::INFINITY, f64::INFINITY), None) };
+            (k, o, f, w)
         })
         .collect();
     ranked.sort_by(|a, b| (!passes(&a.1)).cmp(&!passes(&b.1)).then(a.2 .0.total_cmp(&b.2 .0)).then(a.0.cmp(&b.0)));
-    let n_pass = ranked.iter().filter(|(_, o, f)| passes(o) && f.0 <= opts.max_fit).count();
+    let n_pass = ranked.iter().filter(|(_, o, f, _)| passes(o) && f.0 <= opts.max_fit).count();
     let keep = if n_pass == 0 { 1 } else { n_pass.min(opts.orientations_per_context.max(1)) };
     let mut out = Vec::with_capacity(keep);
-    for (k, occ, (fit, fit_mean)) in ranked.into_iter().take(keep) {
+    for (k, occ, (fit, fit_mean), warp) in ranked.into_iter().take(keep) {
         let r = rots[k];
         let ok = passes(&occ) && fit <= opts.max_fit;
         out.push(Candidate {
@@ -61,6 +72,8 @@ pub fn precheck(input: &PreparedInput, ctx: &Context, opts: &PolycubeOptions) ->
             visible_retry: false,
             fidelity: None,
             score: None,
+            warped: warp.is_some(),
+            warp,
             input: None,
             output: None,
         });
@@ -77,7 +90,7 @@ pub fn lay_out(input: &PreparedInput, cands: &mut [Candidate], opts: &PolycubeOp
         let k = rotations().iter().position(|r| *r == c.axis_rotation).unwrap_or(0);
         const LAYOUT_SEED: u64 = 0x9e37;
         let mut rng = seeded_rng(opts.seed ^ LAYOUT_SEED, k as u64);
-        let t = prepare(&input.samples, &c.context, c.axis_rotation, opts.min_occupied_fraction, &mut rng)?;
+        let t = prepare(&input.samples, &c.context, c.axis_rotation, c.warp.as_ref(), opts.min_occupied_fraction, &mut rng)?;
         c.occupancy = t.occupancy.clone();
         c.input = Some(t);
     }

@@ -13,6 +13,8 @@ fn cand(fit: f64, stage: Stage) -> Candidate {
         report: None,
         refusal: None,
         visible_retry: false,
+        warp: None,
+        warped: false,
         fidelity: None,
         score: None,
         input: None,
