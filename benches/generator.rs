@@ -3,7 +3,7 @@
 //! cases of a seed that neither training (seed 42) nor the sampler's tuning (seed
 //! 8100) used.
 //!
-//! `cargo bench --bench generator -- [--seed 9100] [--cases 48] [--weights FILE] [--csv FILE]`
+//! `cargo bench --bench generator -- [--seed 9100] [--cases 48] [--weights FILE] [--csv FILE] [--without-paper]`
 //!
 //! Quality against training epochs, from the per-epoch snapshots a training run
 //! keeps (`epoch-N.sddpmw` in its checkpoint folder), on 24 cases per group of the
@@ -117,6 +117,8 @@ fn main() {
         Generator { name: "learned (paper's sampler)", model: learned(), opts: PolycubeOptions { sampler: SamplerOptions::paper(), ..Default::default() }, rank: false },
         Generator { name: "template estimate (baseline)", model: Model::template(), opts: PolycubeOptions::template(), rank: true },
     ];
+    // `--without-paper`: skip the paper's sampler (all 500 steps; most of the run's time)
+    let without_paper = args.iter().any(|a| a == "--without-paper");
     let mut out = String::new();
     let mut rows_csv = String::from("section,generator,key,value\n");
     let t0 = std::time::Instant::now();
@@ -155,7 +157,7 @@ fn main() {
     writeln!(out, "\n### Verification, refusal and correspondence\n").unwrap();
     writeln!(out, "| generator | cells | true verified | relabelled refused by GOCC + TCV | median displacement (cell units) | Chamfer to the truth | s |\n|---|---|---:|---:|---:|---:|---:|").unwrap();
     for (lo, hi) in [(1usize, 3usize), (4, 12)] {
-        for g in &gens {
+        for g in gens.iter().filter(|g| !(without_paper && g.opts.sampler.raw_start)) {
             // the paper's sampler runs all 500 steps: a dozen cases per group
             let n = if g.opts.sampler.raw_start { cases.min(12) } else { cases };
             let e = generator_eval(&g.model, seed, n, lo, hi, &g.opts).expect("evaluation");
@@ -184,7 +186,7 @@ fn main() {
     writeln!(out, "\n### BHC ablation ({} warped blind-hole cells; Chamfer of the output to the input, cell units squared)\n", cases.min(12)).unwrap();
     writeln!(out, "| generator | label BHC+Z | label cube | ratio |\n|---|---:|---:|---:|").unwrap();
     let truth = single("BHC+Z");
-    for g in &gens {
+    for g in gens.iter().filter(|g| !(without_paper && g.opts.sampler.raw_start)) {
         let mut sums = [0.0f64; 2];
         let n = cases.min(12);
         for i in 0..n {
