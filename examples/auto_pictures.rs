@@ -62,11 +62,10 @@ fn main() -> sddpm::Result<()> {
         auto.volume,
         auto.surface_volume
     );
-    let Some(dims) = auto.chosen_box else {
+    let Some(bx) = auto.chosen() else {
         println!("no box chosen");
         return Ok(());
     };
-    let bx = auto.boxes.iter().find(|b| b.dims == dims && Some(&b.frame) == auto.chosen_frame.as_ref()).expect("the chosen box is reported");
     // the box's subregions lie in its frame: the aligned mesh's points are turned into it
     let frame = sddpm::search::auto::frames::FRAMES.iter().copied().find(|r| r.name() == bx.frame).unwrap_or(sddpm::polycube::orientation::AxisRotation::IDENTITY);
     println!("\nchosen box {}, {} genus-consistent global candidates, best fit {:?}\n", bx.name(), bx.candidates, bx.best_fit);

@@ -225,7 +225,7 @@ fn follow_box(p: &Context, b: &BoxResult, result: &PolycubeResult, report: &Auto
         return (4, Verdict::lost(LossStage::LabelRanking, "too many combinations", format!("box {dn} of {p}: {}", b.refused.clone().unwrap_or_default())));
     }
     let diffused = |c: &&Candidate| matches!(c.stage, Stage::Gocc | Stage::Tcv | Stage::Verified);
-    let chosen_box = report.boxes.iter().find(|x| Some(x.dims) == report.chosen_box && Some(&x.frame) == report.chosen_frame.as_ref());
+    let chosen_box = report.chosen();
     let tried = chosen_box.is_some_and(|x| std::ptr::eq(x, b)) || result.candidates.iter().filter(diffused).any(|c| from_box(c, b));
     if !tried {
         let chosen = chosen_box.map(|x| x.name()).unwrap_or_else(|| "none".into());

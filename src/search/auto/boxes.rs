@@ -50,25 +50,24 @@ pub(super) fn box_shapes(ratios: Option<&SplitRatios>, frames: usize) -> Vec<(us
                     }
                 }
             }
-            v.sort_by_key(|(f, r)| {
-                let d = r.dims();
-                (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]), *f)
-            });
+            v.sort_by_key(|(f, r)| box_key(r.dims(), *f));
             v
         }
     }
+}
+
+/// The order of the boxes: fewest cells first, then more cells along X, then
+/// along Y, then the frame.
+fn box_key(d: [usize; 3], frame: usize) -> (usize, std::cmp::Reverse<usize>, std::cmp::Reverse<usize>, usize) {
+    (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]), frame)
 }
 
 /// Put the boxes and their records in the order of [`box_shapes`] (fewest cells
 /// first, a box's other frames right after it), which [`super::rank::box_order`]
 /// reads as coarsest first.
 pub(super) fn sort_boxes(boxes: &mut Vec<BoxWork>, records: &mut Vec<BoxResult>) {
-    let key = |w: &BoxWork, r: &BoxResult| {
-        let d = r.dims;
-        (d[0] * d[1] * d[2], std::cmp::Reverse(d[0]), std::cmp::Reverse(d[1]), w.frame)
-    };
     let mut pairs: Vec<(BoxWork, BoxResult)> = boxes.drain(..).zip(records.drain(..)).collect();
-    pairs.sort_by_key(|(w, r)| key(w, r));
+    pairs.sort_by_key(|(w, r)| box_key(r.dims, w.frame));
     for (w, r) in pairs {
         boxes.push(w);
         records.push(r);

@@ -187,9 +187,9 @@ impl BoxResult {
     /// The box's cells and, outside the aligned frame, the input's axis along the
     /// grid's X: "3x2x2", "3x2x2 (X along the input's Y)".
     pub fn name(&self) -> String {
-        let along = match self.frame.as_bytes().get(1) {
-            Some(b'y') => " (X along the input's Y)",
-            Some(b'z') => " (X along the input's Z)",
+        let along = match frames::FRAMES.iter().position(|r| r.name() == self.frame) {
+            Some(1) => " (X along the input's Y)",
+            Some(2) => " (X along the input's Z)",
             _ => "",
         };
         format!("{}x{}x{}{along}", self.dims[0], self.dims[1], self.dims[2])
@@ -236,6 +236,15 @@ struct Run<'a> {
     global: PolycubeOptions,
 }
 
+impl<'a> Run<'a> {
+    /// The run of one frame: `input` and `volume` turned into it, `aligned` the
+    /// input the global stage diffuses in the rotation `frame`.
+    #[allow(clippy::too_many_arguments)]
+    fn new(input: &'a PreparedInput, volume: &'a TemporaryVolume, aligned: &'a PreparedInput, frame: AxisRotation, genus: i64, opts: &'a PolycubeOptions, aopts: &'a AutoOptions, global: &PolycubeOptions) -> Run<'a> {
+        Run { input, volume, fit_sub: &input.samples[..input.samples.len().min(FIT_SAMPLES)], aligned, frame, genus, opts, aopts, global: global.clone() }
+    }
+}
+
 /// Run the automated mode (all boxes, or the full grid split by `ratios`).
 pub fn generate_auto(
     model: &Model,
@@ -256,7 +265,8 @@ pub fn generate_auto(
     let mut report = AutoReport::of_volume(&volume);
     let mut global_opts = opts.clone();
     global_opts.orientations = OrientationSearch::Identity;
-    let base = Run { input: &input, volume: &volume, fit_sub: &input.samples[..input.samples.len().min(FIT_SAMPLES)], aligned: &input, frame: frames::FRAMES[0], genus: input_genus, opts, aopts, global: global_opts.clone() };
+    let run_in = |inp, vol, frame| Run::new(inp, vol, &input, frame, input_genus, opts, aopts, &global_opts);
+    let base = run_in(&input, &volume, frames::FRAMES[0]);
     let t0 = Instant::now();
     // The aligned frame's boxes first; the other frames' (only when the boxes are
     // the automated mode's own: the caller's ratios split the aligned frame) only
@@ -271,7 +281,7 @@ pub fn generate_auto(
     let turned: Vec<PreparedInput> = if more { frames::FRAMES[1..].iter().map(|r| frames::in_frame(&input, *r)).collect() } else { Vec::new() };
     let volumes: Vec<TemporaryVolume> = turned.iter().map(|t| volume::measure(t, aopts)).collect::<Result<_>>()?;
     for ((inp, vol), frame) in turned.iter().zip(&volumes).zip(&frames::FRAMES[1..]) {
-        runs.push(Run { input: inp, volume: vol, fit_sub: &inp.samples[..inp.samples.len().min(FIT_SAMPLES)], aligned: &input, frame: *frame, genus: input_genus, opts, aopts, global: global_opts.clone() });
+        runs.push(run_in(inp, vol, *frame));
     }
     if more {
         let from = boxes.len();
@@ -298,6 +308,11 @@ pub fn generate_auto(
 }
 
 impl AutoReport {
+    /// The record of the box last tried (its dims and frame), if any.
+    pub fn chosen(&self) -> Option<&BoxResult> {
+        self.boxes.iter().find(|b| Some(b.dims) == self.chosen_box && Some(&b.frame) == self.chosen_frame.as_ref())
+    }
+
     /// The report of a run on `volume`, before any box.
     fn of_volume(volume: &TemporaryVolume) -> AutoReport {
         let (vol, surface_volume) = (&volume.vol, volume.surface_volume);
@@ -383,7 +398,7 @@ pub fn auto_failure(result: &PolycubeResult, report: &AutoReport) -> Option<Erro
     if let Some(why) = &report.no_candidate {
         return Some(Error::VerificationFailed(why.clone()));
     }
-    let Some(b) = report.boxes.iter().find(|b| Some(b.dims) == report.chosen_box && Some(&b.frame) == report.chosen_frame.as_ref()) else {
+    let Some(b) = report.chosen() else {
         // no box was tried: every box was refused or passed over
         // boxes that had candidates (passed over on the fit limit) first
         let mut boxes: Vec<&BoxResult> = report.boxes.iter().filter(|b| b.refused.is_some()).collect();

@@ -172,32 +172,38 @@ pub fn cell_fits(p: &[[f64; 3]], cells: &[usize], target: &[[f64; 3]], target_ce
     out
 }
 
-/// The per-cell fits of the input against the context's polycube `target` after
-/// the quadratic registration ([`register_warp`]) of the box-mapped samples, with
-/// the map; None when no map was found (the rigid fit stands). The samples are
-/// given to cells where they land after the map.
-pub fn warped_fit(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)]) -> Option<(Warp, [f64; NUM_CELLS])> {
-    let (grid, _) = fit_points(samples, ctx, rotation, [1.0; 3])?;
-    let q: Vec<[f64; 3]> = target.iter().map(|t| t.0).collect();
-    let qc: Vec<usize> = target.iter().map(|t| t.1).collect();
-    let w = register_warp(&grid, &q)?;
+/// The per-cell fits of the box-mapped samples `grid` (grid units) against the
+/// polycube points `q` (with cells `qc`) after the quadratic registration
+/// ([`register_warp`]), with the map; None when no map was found. The samples
+/// are given to the cells where they land after the map.
+fn warped_fit(grid: &[[f64; 3]], ctx: &Context, q: &[[f64; 3]], qc: &[usize]) -> Option<(Warp, [f64; NUM_CELLS])> {
+    let w = register_warp(grid, q)?;
     let (frame, _, _) = crate::search::inference::context_box(ctx)?;
     let (glo, ghi) = crate::polycube::assembly::occupied_cell_box(&ctx.labels)?;
     let moved: Vec<[f64; 3]> = grid.iter().map(|x| w.apply(*x)).collect();
     let cells: Vec<usize> = moved.iter().map(|g| crate::search::inference::cell_of(&frame, glo, ghi, &ctx.labels, frame.to_normalised(*g))).collect();
-    Some((w, cell_fits(&moved, &cells, &q, &qc)))
+    Some((w, cell_fits(&moved, &cells, q, qc)))
 }
 
 /// A candidate's fit (worst cell, mean over the cells) of the input under
-/// `rotation`: the rigid fit of [`super::fit_score_cells`] or, with `warp` and
-/// when it is lower, the fit after the registration ([`warped_fit`]), with the map.
+/// `rotation` against the context's polycube `target`: the rigid fit of
+/// [`super::fit_score_cells`] or, with `warp` and when it is lower, the fit
+/// after the registration, with the map. The samples are box-mapped once for
+/// both.
 pub fn candidate_fit(samples: &[SurfaceSample], ctx: &Context, rotation: AxisRotation, target: &[([f64; 3], usize)], warp: bool) -> ((f64, f64), Option<Warp>) {
-    let rigid = super::worst_and_mean(&super::fit_score_cells(samples, ctx, rotation, target, [1.0; 3]));
+    let infinite = ((f64::INFINITY, f64::INFINITY), None);
+    let Some((grid, cells)) = fit_points(samples, ctx, rotation, [1.0; 3]) else { return infinite };
+    if target.is_empty() {
+        return infinite;
+    }
+    let q: Vec<[f64; 3]> = target.iter().map(|t| t.0).collect();
+    let qc: Vec<usize> = target.iter().map(|t| t.1).collect();
+    let rigid = super::worst_and_mean(&cell_fits(&grid, &cells, &q, &qc));
     if !warp {
         return (rigid, None);
     }
-    match warped_fit(samples, ctx, rotation, target) {
-        Some((w, cells)) if super::worst_and_mean(&cells).0 < rigid.0 => (super::worst_and_mean(&cells), Some(w)),
+    match warped_fit(&grid, ctx, &q, &qc) {
+        Some((w, fits)) if super::worst_and_mean(&fits).0 < rigid.0 => (super::worst_and_mean(&fits), Some(w)),
         _ => (rigid, None),
     }
 }
