@@ -120,3 +120,27 @@ fn a_row_across_the_longest_side_is_found_in_another_frame() {
     // subregions show no row of holes)
     assert!(!v.recovered, "recovered in the aligned frame alone");
 }
+
+/// A real part, cinolib_3holes (a block with three holes through it in a row):
+/// the automated mode verifies three through-hole cubes along the row. Each
+/// cell's output lies at a near tie between its own template and the blind hole
+/// on the same axis (a real hole's rim is not a template's); the cell's input
+/// shows the hole through it, and a blind hole would change the part's genus,
+/// so TCV does not count that template as a rival
+/// (`VerifyOptions::same_genus_rivals`); with every template a rival, no
+/// candidate verifies.
+#[test]
+fn a_real_part_whose_holes_tie_with_blind_holes_is_verified_by_its_openings() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/cinolib_3holes.obj");
+    let mesh = sddpm::mesh::TriMesh::load(path, &sddpm::mesh::LoadOptions::default()).unwrap();
+    let model = Model::default_model().expect("the embedded model");
+    let truth = Context::parse("THC+Z,THC+Z,THC+Z,null,null,null,null,null,null,null,null,null").unwrap();
+    let run = |opts: &PolycubeOptions| generate_polycube(&model, &mesh, 3, &ContextRequest::Auto, opts, &AutoOptions::default(), &mut NoProgress).expect("the automated mode").0;
+    let pr = run(&PolycubeOptions::default());
+    let chosen = pr.chosen.map(|k| pr.candidates[k].context).expect("a verified polycube");
+    assert!(sddpm::polycube::assembly::congruent(&chosen.assemble(), &truth.assemble()), "chose {}", chosen.names());
+    let mut all_rivals = PolycubeOptions::default();
+    all_rivals.verify.same_genus_rivals = false;
+    let pr = run(&all_rivals);
+    assert_eq!(pr.chosen, None, "verified with every template a rival: {:?}", pr.chosen.map(|k| pr.candidates[k].context.names()));
+}

@@ -6,10 +6,12 @@
 
 use super::super::generate::{diffuse_and_verify, lay_out, limit_fit, precheck_in, without_fit_limit, Candidate, PolycubeTimings, Stage};
 use super::boxes::BoxWork;
-use super::{local, AutoReport, Run};
+use super::openings::Openings;
+use super::{local, AutoReport, LocalResult, Run};
 use crate::context::Context;
 use crate::diffusion::Model;
 use crate::error::{Progress, Result};
+use crate::polycube::NUM_CELLS;
 
 /// Try the boxes in `order` (at most `max_boxes`) until one yields a verified
 /// polycube; the candidates of the boxes tried, or, when every box was passed
@@ -45,7 +47,8 @@ pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], orde
         // Local single-cell diffusion + verification for this box's kept labels (one batch).
         local::local_stage(run, model, &mut boxes[cb], &mut report.boxes[cb].locals, &mut |f: f64, s: &str| progress.report(span + 0.2 * f, s), timings)?;
         let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / max_boxes as f64, s);
-        let global = global_stage(run, model, &boxes[cb].cands, &prechecked, best_overall, &mut sub_progress, timings)?;
+        let openings = cell_openings(&report.boxes[cb].locals);
+        let global = global_stage(run, model, &boxes[cb].cands, &prechecked, &openings, best_overall, &mut sub_progress, timings)?;
         let done = global.iter().any(|c| c.stage == Stage::Verified);
         all_global.extend(global);
         if done {
@@ -69,10 +72,34 @@ fn probe(run: &Run, cands: &[(Context, f64)], best_overall: f64) -> Result<(Vec<
     Ok((prechecked, probe))
 }
 
+/// The openings of each cell's subregion in a box.
+fn cell_openings(locals: &[LocalResult]) -> [Option<Openings>; NUM_CELLS] {
+    let mut o = [None; NUM_CELLS];
+    for l in locals {
+        o[l.subregion.cell] = Some(l.subregion.openings);
+    }
+    o
+}
+
+/// The cells of `ctx` whose label has a hole that its subregion's openings show
+/// (`Candidate::holes_shown`).
+fn holes_shown(ctx: &Context, openings: &[Option<Openings>; NUM_CELLS]) -> u16 {
+    let mut m = 0u16;
+    for n in ctx.occupied() {
+        let l = ctx.labels[n];
+        if l.hole().is_some() && openings[n].is_some_and(|o| o.carries(l)) {
+            m |= 1 << n;
+        }
+    }
+    m
+}
+
 /// The global stage of one box: its first `max_global` candidates (their
 /// pre-check verdicts from `prechecked` where known) within the fit limit, laid
-/// out, diffused in one batch and verified.
-fn global_stage(run: &Run, model: &Model, cands: &[(Context, f64)], prechecked: &[Candidate], best_overall: f64, progress: &mut dyn Progress, timings: &mut PolycubeTimings) -> Result<Vec<Candidate>> {
+/// out, diffused in one batch and verified, each with the cells whose holes its
+/// subregions show.
+#[allow(clippy::too_many_arguments)]
+fn global_stage(run: &Run, model: &Model, cands: &[(Context, f64)], prechecked: &[Candidate], openings: &[Option<Openings>; NUM_CELLS], best_overall: f64, progress: &mut dyn Progress, timings: &mut PolycubeTimings) -> Result<Vec<Candidate>> {
     let mut global: Vec<Candidate> = Vec::new();
     let o = &run.global;
     for (ctx, _) in cands.iter().take(run.aopts.max_global.max(1)) {
@@ -84,6 +111,9 @@ fn global_stage(run: &Run, model: &Model, cands: &[(Context, f64)], prechecked: 
         }
     }
     limit_fit(&mut global, o, best_overall);
+    for c in global.iter_mut() {
+        c.holes_shown = holes_shown(&c.context, openings);
+    }
     lay_out(run.aligned, &mut global, o)?;
     diffuse_and_verify(model, &mut global, run.opts, progress, timings)?;
     Ok(global)

@@ -206,6 +206,7 @@ fn refused_candidate(names: &str, stage: crate::search::generate::Stage, fit: f6
         visible_retry: false,
         warp: None,
         warped: false,
+        holes_shown: 0,
         input: None,
         output: None,
     }

@@ -38,6 +38,7 @@ fn cand(c: Context, stage: Stage) -> Candidate {
         visible_retry: false,
         warp: None,
         warped: false,
+        holes_shown: 0,
         input: None,
         output: None,
     }

@@ -24,7 +24,7 @@ pub fn diffuse_and_verify(
     for (k, &i) in idx.iter().enumerate() {
         let c = &mut cands[i];
         let inp = c.input.as_ref().unwrap();
-        let rep = verify(&out.tensors[k], &c.context, &inp.frame, &opts.verify);
+        let rep = verify_cells(&out.tensors[k], &c.context, &inp.frame, &opts.verify, c.holes_shown);
         c.stage = if !rep.gocc_pass {
             Stage::Gocc
         } else if !rep.tcv_pass {
@@ -62,7 +62,7 @@ fn visible_retry(model: &Model, cands: &mut [Candidate], idx: &[usize], opts: &P
     let t0 = Instant::now();
     for (k, &i) in again.iter().enumerate() {
         let c = &mut cands[i];
-        let rep = verify(&out.tensors[k], &c.context, &c.input.as_ref().unwrap().frame, &verify_opts);
+        let rep = verify_cells(&out.tensors[k], &c.context, &c.input.as_ref().unwrap().frame, &verify_opts, c.holes_shown);
         if rep.passed {
             c.stage = Stage::Verified;
             c.set_output(out.tensors[k].clone(), rep);

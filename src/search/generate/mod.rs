@@ -4,7 +4,7 @@
 //! and its diffusion output with the surface correspondence.
 
 use super::inference::{occupancy_only, prepare, InferenceInput, Occupancy, DEFAULT_OVERSAMPLING};
-use super::verify::{verify, VerificationReport, VerifyOptions};
+use super::verify::{verify_cells, VerificationReport, VerifyOptions};
 use crate::context::Context;
 use crate::diffusion::Model;
 use crate::diffusion::sample::{reverse_diffusion, SamplerOptions};
@@ -216,11 +216,21 @@ pub struct Candidate {
     /// Whether the fit and the inference input are those after the registration.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub warped: bool,
+    /// The cells (bit n for cell n) whose input shows the label's hole, which
+    /// TCV then decides among the labels of the context's genus
+    /// ([`crate::search::verify::VerifyOptions::same_genus_rivals`]); set by the
+    /// automated mode from its subregions' openings, 0 elsewhere.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub holes_shown: u16,
     #[serde(skip)]
     pub input: Option<InferenceInput>,
     /// Diffusion output [3, 64, 96].
     #[serde(skip)]
     pub output: Option<Vec<f32>>,
+}
+
+fn is_zero(v: &u16) -> bool {
+    *v == 0
 }
 
 fn ser_ctx<S: serde::Serializer>(c: &Context, s: S) -> std::result::Result<S::Ok, S::Error> {

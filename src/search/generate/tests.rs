@@ -15,6 +15,7 @@ fn cand(fit: f64, stage: Stage) -> Candidate {
         visible_retry: false,
         warp: None,
         warped: false,
+        holes_shown: 0,
         fidelity: None,
         score: None,
         input: None,
