@@ -94,6 +94,12 @@ fn holes_shown(ctx: &Context, openings: &[Option<Openings>; NUM_CELLS]) -> u16 {
     m
 }
 
+/// The occupied cells of `ctx` whose label their subregion's openings do not
+/// carry (`Candidate::openings_missed`).
+fn openings_missed(ctx: &Context, openings: &[Option<Openings>; NUM_CELLS]) -> u8 {
+    ctx.occupied().filter(|&n| openings[n].is_some_and(|o| !o.carries(ctx.labels[n]))).count() as u8
+}
+
 /// The global stage of one box: its first `max_global` candidates (their
 /// pre-check verdicts from `prechecked` where known) within the fit limit, laid
 /// out, diffused in one batch and verified, each with the cells whose holes its
@@ -113,6 +119,9 @@ fn global_stage(run: &Run, model: &Model, cands: &[(Context, f64)], prechecked: 
     limit_fit(&mut global, o, best_overall);
     for c in global.iter_mut() {
         c.holes_shown = holes_shown(&c.context, openings);
+        if run.aopts.opening_labels {
+            c.openings_missed = openings_missed(&c.context, openings);
+        }
     }
     lay_out(run.aligned, &mut global, o)?;
     diffuse_and_verify(model, &mut global, run.opts, progress, timings)?;

@@ -18,8 +18,11 @@
 //! 4. Global stage: products of the kept labels whose assembly is valid and has the
 //!    input's genus are ranked by geometric fit averaged over their cells; the best
 //!    ones pass the occupancy pre-check, are diffused in one batch and verified (a
-//!    failing one a second time with the visible prior); the verified candidate
-//!    with the lowest mean cell fit is chosen.
+//!    failing one a second time with the visible prior; a cell whose subregion
+//!    shows its label's hole is judged against labels of the input's genus only,
+//!    `VerifyOptions::same_genus_rivals`); of the verified candidates, the one
+//!    with the fewest cells whose label their subregion's openings do not carry
+//!    (with `opening_labels`), then the lowest mean cell fit, is chosen.
 //!
 //! By concern: the temporary volume and its subregions ([`volume`]); each box's
 //! subregions, feasible labels and candidate assemblies ([`boxes`]); the fits that
@@ -127,7 +130,9 @@ pub struct AutoOptions {
     /// Rank first, among a subregion's feasible labels, those whose hole its
     /// voxels show ([`openings`]: a hole through it along the label's axis, a
     /// blind hole opening on the label's face, or no opening for the cube), then
-    /// the others, each part by the in-context fit (default true).
+    /// the others, each part by the in-context fit; and among the verified
+    /// candidates, those with the fewest cells whose label the openings do not
+    /// carry come first (`Candidate::openings_missed`) (default true).
     pub opening_labels: bool,
     /// Also analyse the boxes with three cells along X with the grid's X along
     /// the input's Y and along its Z ([`frames`]), when no box of the aligned

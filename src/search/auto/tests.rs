@@ -207,6 +207,7 @@ fn refused_candidate(names: &str, stage: crate::search::generate::Stage, fit: f6
         warp: None,
         warped: false,
         holes_shown: 0,
+        openings_missed: 0,
         input: None,
         output: None,
     }

@@ -39,6 +39,7 @@ fn cand(c: Context, stage: Stage) -> Candidate {
         warp: None,
         warped: false,
         holes_shown: 0,
+        openings_missed: 0,
         input: None,
         output: None,
     }

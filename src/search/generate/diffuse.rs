@@ -105,13 +105,15 @@ pub fn generate_from_contexts(
     Ok(finish(input, input_genus, "user", cands, timings, model.generator_name(opts.sampler.kernel_gate)))
 }
 
-/// Rank the verified candidates and build the result.
+/// Rank the verified candidates (fewest cells whose label the input's openings
+/// do not carry, then the lowest score) and build the result.
 pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cands: Vec<Candidate>, timings: PolycubeTimings, generator: String) -> PolycubeResult {
+    let key = |c: &Candidate| (c.openings_missed, c.score.unwrap_or(f64::INFINITY));
     let chosen = cands
         .iter()
         .enumerate()
         .filter(|(_, c)| c.stage == Stage::Verified && c.output.is_some())
-        .min_by(|a, b| a.1.score.unwrap_or(f64::INFINITY).total_cmp(&b.1.score.unwrap_or(f64::INFINITY)))
+        .min_by(|a, b| key(a.1).0.cmp(&key(b.1).0).then(key(a.1).1.total_cmp(&key(b.1).1)))
         .map(|(i, _)| i);
     PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings, generator, samples: std::sync::Arc::new(input.samples) }
 }

@@ -198,7 +198,8 @@ pub struct Candidate {
     /// Mean squared distance between the output and the input samples it started
     /// from (model frame); lower means the polycube stayed closer to the input.
     pub fidelity: Option<f64>,
-    /// Ranking score of a diffused candidate, lower is better: `fit_mean`. The worst
+    /// Ranking score of a diffused candidate, lower is better: `fit_mean` (after
+    /// `openings_missed`, see [`finish`]). The worst
     /// cell alone ties candidates that differ only in cells fitting better than the
     /// worst one, and the mean target PCD separates them no better; measured on 72
     /// held-in cases (BENCHMARKS.md, "Ranking verified candidates by the mean cell
@@ -222,6 +223,12 @@ pub struct Candidate {
     /// automated mode from its subregions' openings, 0 elsewhere.
     #[serde(skip_serializing_if = "is_zero")]
     pub holes_shown: u16,
+    /// Occupied cells whose label the input's openings there do not carry (a
+    /// hole the cell does not show, or a cube where it shows one); set by the
+    /// automated mode with `AutoOptions::opening_labels`, 0 elsewhere. Among the
+    /// verified candidates the fewest come first, then the score.
+    #[serde(skip_serializing_if = "is_zero_u8")]
+    pub openings_missed: u8,
     #[serde(skip)]
     pub input: Option<InferenceInput>,
     /// Diffusion output [3, 64, 96].
@@ -230,6 +237,10 @@ pub struct Candidate {
 }
 
 fn is_zero(v: &u16) -> bool {
+    *v == 0
+}
+
+fn is_zero_u8(v: &u8) -> bool {
     *v == 0
 }
 

@@ -16,6 +16,7 @@ fn cand(fit: f64, stage: Stage) -> Candidate {
         warp: None,
         warped: false,
         holes_shown: 0,
+        openings_missed: 0,
         fidelity: None,
         score: None,
         input: None,
@@ -178,4 +179,17 @@ fn a_context_one_label_from_a_far_better_fit_is_refused_and_named() {
         assert!(c[0].refusal.is_none());
     }
     assert!(reached >= 8 && 2 * refused > reached, "{refused} of {reached} refused");
+}
+
+#[test]
+fn among_verified_candidates_the_openings_come_before_the_fit() {
+    let truth = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mesh = crate::polycube::boundary(&truth.assemble()).to_trimesh();
+    let (alignment, frame) = crate::geometry::orient::align_axes(&mesh).unwrap();
+    let verified = |fit: f64, missed: u8| Candidate { score: Some(fit), openings_missed: missed, output: Some(Vec::new()), ..cand(fit, Stage::Verified) };
+    let pick = |cands: Vec<Candidate>| finish(PreparedInput { alignment: alignment.clone(), frame, samples: Vec::new(), area: 1.0 }, 0, "auto", cands, PolycubeTimings::default(), "test".into()).chosen;
+    // a blind hole the cell does not show, fitting better, against the cube it shows
+    assert_eq!(pick(vec![verified(0.45, 1), verified(1.08, 0)]), Some(1));
+    // the same count: the fit decides; a candidate not verified is never chosen
+    assert_eq!(pick(vec![verified(0.45, 1), verified(1.08, 1), cand(0.01, Stage::Tcv)]), Some(0));
 }
