@@ -139,7 +139,8 @@ impl Default for SurfaceOptions {
 pub struct QualityOptions {
     /// One pillow layer under the boundary (default true).
     pub pillow: bool,
-    /// Feature sheets (lattice meshes, after pillowing): the boundary quads
+    /// Feature sheets (after pillowing; the fallback's lattices and the polycube
+    /// map's mesh alike): the boundary quads
     /// labelled with the input patch they lie on (patches: the input split by its
     /// sharp curves), a sheet of elements inserted under each patch's quads within
     /// one ring of another label, and the nodes where labels meet put on the sharp

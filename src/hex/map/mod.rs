@@ -97,11 +97,8 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     check_progress(progress, 0.0, "hex: setup")?;
     let (fr, mesh_n) = working_frames(&input.surface, &input.to_user, opts)?;
     let mapped = levels::map_levels(input, mesh_n, &fr, opts, progress)?;
-    // the feature sheets are for lattice meshes (the polycube map puts nodes on the curves itself)
-    let mut opts = opts.clone();
-    opts.quality.feature_sheets = false;
     let stage = MapStage { surface_map: mapped.surface_map, levels: mapped.levels, fit: mapped.fit, lattice: None };
-    improve(mapped.level, mapped.targets, stage, &fr, &opts, t_all, progress)
+    improve(mapped.level, mapped.targets, stage, &fr, opts, t_all, progress)
 }
 
 /// The checks of [`build_hex_mesh`]: a valid polycube, a surface with triangles,
