@@ -97,7 +97,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("polycube.verify.penalty_p", Number, false, "Exponent p of the Chamfer distance's penalty"),
     opt("polycube.verify.template_points", Integer, false, "Points sampled on each template"),
     opt("polycube.verify.visible_coverage", Bool, false, "Leave the template faces shared with an occupied neighbour out of TCV's coverage half"),
-    opt("polycube.verify.same_genus_rivals", Bool, false, "TCV compares a cell's label only with the labels that keep the context's genus (off: with all ten)"),
+    opt("polycube.verify.same_genus_rivals", Bool, false, "In a cell whose input shows the label's hole, TCV compares the label only with the labels that keep the context's genus (off: with all ten everywhere)"),
     // polycube generation: pre-checks and search
     opt("polycube.orientations", Str, false, "Grid rotations of the aligned input tried: \"Identity\" (as aligned), \"SignFlips\" (and its sign flips) or \"All\" (all 24)"),
     opt("polycube.max_in_empty_fraction", Number, false, "Pre-check: largest fraction of the input's surface allowed in cells the context leaves empty"),

@@ -113,7 +113,10 @@ pub fn finish(input: PreparedInput, input_genus: i64, source: &'static str, cand
         .iter()
         .enumerate()
         .filter(|(_, c)| c.stage == Stage::Verified && c.output.is_some())
-        .min_by(|a, b| key(a.1).0.cmp(&key(b.1).0).then(key(a.1).1.total_cmp(&key(b.1).1)))
+        .min_by(|a, b| {
+            let (ka, kb) = (key(a.1), key(b.1));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        })
         .map(|(i, _)| i);
     PolycubeResult { input_genus, source, alignment: input.alignment, frame: input.frame, candidates: cands, chosen, timings, generator, samples: std::sync::Arc::new(input.samples) }
 }
