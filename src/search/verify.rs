@@ -293,8 +293,8 @@ pub fn verify_cells(output: &[f32], ctx: &Context, frame: &BoxFrame, opts: &Veri
     let mut target_n = 0usize;
     // Active points of every block, in grid units (for the null-region check).
     let mut all_grid: Vec<[f64; 3]> = Vec::new();
-    // the context's genus, measured once when a same-genus rival test needs it
-    let mut genus: Option<Option<i64>> = None;
+    // the context's genus, for the cells whose input shows the label's hole
+    let genus = if opts.same_genus_rivals && shown != 0 { ctx.validity().genus } else { None };
     for n in 0..NUM_CELLS {
         let label = ctx.labels[n];
         let pts: Vec<[f64; 3]> = blocks[n]
@@ -373,8 +373,7 @@ pub fn verify_cells(output: &[f32], ctx: &Context, frame: &BoxFrame, opts: &Veri
                 target_sum += dt;
                 target_n += 1;
                 rep.nearest = Some(best.1.name().to_string());
-                let same_genus = opts.same_genus_rivals && shown & (1 << n) != 0;
-                let rival = nearer_rival(ctx, n, &rep.pcd, dt, same_genus.then_some(&mut genus));
+                let rival = nearer_rival(ctx, n, &rep.pcd, dt, genus.filter(|_| shown & (1 << n) != 0));
                 rep.nearer_rival = rival.map(|(p, _)| p.name().to_string());
                 if let Some((p, d)) = rival {
                     fail(&mut rep, format!("cell {n} {:?}: its points are nearer to {p} (PCD {d:.4}) than to {label} (PCD {dt:.4})", cell_coords(n)));
@@ -426,19 +425,15 @@ pub fn verify_cells(output: &[f32], ctx: &Context, frame: &BoxFrame, opts: &Veri
 }
 
 /// The nearest template nearer than the target's (PCD `dt`) among cell `n`'s
-/// rivals: every other solid label, or with `genus` (the context's genus, measured
-/// on first use) only those that keep the context a valid solid of that genus.
-fn nearer_rival(ctx: &Context, n: usize, pcd: &[f64], dt: f64, mut genus: Option<&mut Option<Option<i64>>>) -> Option<(Primitive, f64)> {
+/// rivals: every other solid label, or with `genus` (the context's) only those
+/// that keep the context a valid solid of that genus.
+fn nearer_rival(ctx: &Context, n: usize, pcd: &[f64], dt: f64, genus: Option<i64>) -> Option<(Primitive, f64)> {
     let mut nearer: Vec<(Primitive, f64)> = Primitive::solids().zip(pcd.iter().copied()).filter(|&(p, d)| p != ctx.labels[n] && d < dt).collect();
     nearer.sort_by(|a, b| a.1.total_cmp(&b.1));
-    nearer.into_iter().find(|&(p, _)| match genus.as_deref_mut() {
-        None => true,
-        Some(g) => {
-            let own = *g.get_or_insert_with(|| ctx.validity().genus);
-            let mut w = *ctx;
-            w.labels[n] = p;
-            own.is_some() && w.validity().genus == own
-        }
+    nearer.into_iter().find(|&(p, _)| {
+        let mut w = *ctx;
+        w.labels[n] = p;
+        genus.is_none() || w.validity().genus == genus
     })
 }
 
@@ -529,11 +524,11 @@ mod tests {
         let thc_y = Primitive::parse("THC+Y").unwrap();
         // a blind hole would make the solid genus 0: not a labelling of this input
         let pcd = pcd_with(&[(bhc, 0.008)]);
-        assert_eq!(nearer_rival(&ctx, 0, &pcd, 0.010, Some(&mut None)), None);
+        assert_eq!(nearer_rival(&ctx, 0, &pcd, 0.010, Some(1)), None);
         assert_eq!(nearer_rival(&ctx, 0, &pcd, 0.010, None), Some((bhc, 0.008)), "every template a rival");
         // a hole along Y keeps genus 1 (one along X would open into the cube), so it is a rival even behind the nearer blind hole
         let pcd = pcd_with(&[(bhc, 0.008), (thc_y, 0.009)]);
-        assert_eq!(nearer_rival(&ctx, 0, &pcd, 0.010, Some(&mut None)), Some((thc_y, 0.009)));
+        assert_eq!(nearer_rival(&ctx, 0, &pcd, 0.010, Some(1)), Some((thc_y, 0.009)));
     }
 
     #[test]

@@ -227,7 +227,7 @@ pub struct Candidate {
     /// hole the cell does not show, or a cube where it shows one); set by the
     /// automated mode with `AutoOptions::opening_labels`, 0 elsewhere. Among the
     /// verified candidates the fewest come first, then the score.
-    #[serde(skip_serializing_if = "is_zero_u8")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub openings_missed: u8,
     #[serde(skip)]
     pub input: Option<InferenceInput>,
@@ -236,12 +236,8 @@ pub struct Candidate {
     pub output: Option<Vec<f32>>,
 }
 
-fn is_zero(v: &u16) -> bool {
-    *v == 0
-}
-
-fn is_zero_u8(v: &u8) -> bool {
-    *v == 0
+fn is_zero<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
 }
 
 fn ser_ctx<S: serde::Serializer>(c: &Context, s: S) -> std::result::Result<S::Ok, S::Error> {
