@@ -144,3 +144,26 @@ fn a_real_part_whose_holes_tie_with_blind_holes_is_verified_by_its_openings() {
     let pr = run(&all_rivals);
     assert_eq!(pr.chosen, None, "verified with every template a rival: {:?}", pr.chosen.map(|k| pr.candidates[k].context.names()));
 }
+
+/// mambo_B0, a block with a round channel across its top, is an arch of five
+/// cells. Its single stretched cell fits better in that box's own cell units (a
+/// blind-hole cube, 0.026 against the arch's 0.12), which used to put the arch's
+/// box past the fit limit; compared in the length common to all boxes
+/// (`rank::box_scale`) the arch fits about a hundred times better, and it is
+/// the verified choice.
+#[test]
+fn a_block_with_a_channel_is_an_arch_when_boxes_are_compared_in_one_length() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/mambo_B0.obj");
+    let mesh = sddpm::mesh::TriMesh::load(path, &sddpm::mesh::LoadOptions::default()).unwrap();
+    let model = Model::default_model().expect("the embedded model");
+    let (pr, report, _) = generate_polycube(&model, &mesh, 0, &ContextRequest::Auto, &PolycubeOptions::default(), &AutoOptions::default(), &mut NoProgress).expect("the automated mode");
+    let chosen = pr.chosen.map(|k| pr.candidates[k].context).expect("a verified polycube");
+    let arch = Context::parse("cube,cube,cube,cube,null,cube,null,null,null,null,null,null").unwrap();
+    assert!(sddpm::polycube::assembly::congruent(&chosen.assemble(), &arch.assemble()), "chose {}", chosen.names());
+    let report = report.expect("the automated mode's report");
+    let one = report.boxes.iter().find(|b| b.dims == [1, 1, 1]).expect("the one-cell box");
+    let tried = report.chosen().expect("the box tried");
+    // in their own cell units the single cell fits better, in the common length far worse
+    assert!(one.best_fit.unwrap() < tried.best_fit.unwrap(), "{:?} {:?}", one.best_fit, tried.best_fit);
+    assert!(one.best_fit_common.unwrap() > 10.0 * tried.best_fit_common.unwrap(), "{:?} {:?}", one.best_fit_common, tried.best_fit_common);
+}

@@ -125,6 +125,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("auto.register_cells", Bool, false, "Automated mode: rank a subregion's labels after a local affine registration of its cell"),
     opt("auto.opening_labels", Bool, false, "Automated mode: rank first the labels whose hole the subregion's voxels show"),
     opt("auto.axis_frames", Bool, false, "Automated mode: also try the boxes with three cells along X with the grid's X along the input's Y and Z"),
+    opt("auto.fitted_splits", Bool, false, "Automated mode: also try each box with its cell boundaries where the part's cross-section changes (the input warped onto the equal grid)"),
     // the hex stage (docs/hex.md)
     opt("hex.map.level", Integer, true, "Fixed octree subdivision level, 0 to 6 (none: chosen by the stopping rule)"),
     opt("hex.map.min_level", Integer, false, "Smallest level the stopping rule may choose (at most hex.map.max_level)"),

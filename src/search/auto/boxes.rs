@@ -97,7 +97,7 @@ fn analyse_box(run: &Run, r: &SplitRatios) -> (BoxResult, BoxWork) {
     let ys = split_points(bb.min[1], bb.max[1], &r.y);
     let zs = split_points(bb.min[2], bb.max[2], &r.z);
     let subs = subregions(&run.volume.vol, &run.volume.clean, &xs, &ys, &zs, run.aopts.min_fill);
-    let mut br = BoxResult { dims: r.dims(), frame: run.frame.name(), ratios: r.clone(), locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, joint_candidates: 0, refused: None };
+    let mut br = BoxResult { dims: r.dims(), frame: run.frame.name(), ratios: r.clone(), fitted: false, locals: Vec::new(), candidates: 0, best_fit: None, best_fit_common: None, joint_candidates: 0, refused: None };
     let mut work = BoxWork { cands: Vec::new(), joint: None, joint_found: HashSet::new(), local_jobs: Vec::new(), frame: 0 };
     let labels_of = match subs.iter().map(|sub| feasible(sub, run.aopts.null_fill)).collect::<std::result::Result<Vec<_>, String>>() {
         Ok(l) => l,

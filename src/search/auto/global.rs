@@ -18,7 +18,10 @@ use crate::polycube::NUM_CELLS;
 /// over, theirs (the main job can still mesh the best-fitting of them, see
 /// pipeline::fallback_order).
 pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], order: &[usize], report: &mut AutoReport, progress: &mut dyn Progress, timings: &mut PolycubeTimings) -> Result<Vec<Candidate>> {
-    let best_overall = report.boxes.iter().filter_map(|b| b.best_fit).fold(f64::INFINITY, f64::min);
+    // the best fit of every box in the length common to all boxes
+    // ([`super::rank::box_scale`]): a stretched single cell shrinks the part's
+    // features and fits best in its own cell units
+    let best_common = report.boxes.iter().filter_map(|b| b.best_fit_common).fold(f64::INFINITY, f64::min);
     let max_boxes = runs[0].aopts.max_boxes.max(1);
     let mut all_global: Vec<Candidate> = Vec::new();
     let mut attempt = 0usize;
@@ -31,12 +34,13 @@ pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], orde
         // A box none of whose candidates the fit limit would admit (they all fit far
         // worse than another box's best) is passed over without using up an attempt
         // or running its local stage.
+        let best_overall = in_box_units(best_common, &report.boxes[cb]);
         let (prechecked, probe) = probe(run, &boxes[cb].cands, best_overall)?;
         if !probe.iter().any(|c| c.stage == Stage::Pending) {
             passed_over.extend(probe);
             let br = &mut report.boxes[cb];
             if br.refused.is_none() {
-                br.refused = Some(format!("no candidate passes the occupancy pre-check and the fit limit (best fit {:.4}, best of all boxes {best_overall:.4})", br.best_fit.unwrap_or(f64::INFINITY)));
+                br.refused = Some(format!("no candidate passes the occupancy pre-check and the fit limit (best fit {:.4}, best of all boxes {best_overall:.4} in this box's cell units)", br.best_fit.unwrap_or(f64::INFINITY)));
             }
             continue;
         }
@@ -44,6 +48,7 @@ pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], orde
         attempt += 1;
         report.chosen_box = Some(report.boxes[cb].dims);
         report.chosen_frame = Some(report.boxes[cb].frame.clone());
+        report.chosen_fitted = report.boxes[cb].fitted;
         // Local single-cell diffusion + verification for this box's kept labels (one batch).
         local::local_stage(run, model, &mut boxes[cb], &mut report.boxes[cb].locals, &mut |f: f64, s: &str| progress.report(span + 0.2 * f, s), timings)?;
         let mut sub_progress = |f: f64, s: &str| progress.report(span + 0.2 + 0.4 * f / max_boxes as f64, s);
@@ -56,6 +61,16 @@ pub(super) fn try_boxes(runs: &[Run], model: &Model, boxes: &mut [BoxWork], orde
         }
     }
     Ok(if attempt == 0 { passed_over } else { all_global })
+}
+
+/// A fit in the common length (`best_fit_common`'s) in the cell units of the box
+/// `b`, by the ratio of its best candidate's two fits; infinite (no limit from
+/// the other boxes) when the box has no fit.
+fn in_box_units(common: f64, b: &super::BoxResult) -> f64 {
+    match (b.best_fit, b.best_fit_common) {
+        (Some(f), Some(c)) if c > 0.0 && f.is_finite() && c.is_finite() => common * f / c,
+        _ => f64::INFINITY,
+    }
 }
 
 /// The occupancy pre-check of a box's first `max_global` candidates without the

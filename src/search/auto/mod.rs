@@ -3,7 +3,9 @@
 //! 1. The temporary volume of the aligned input ([`crate::geometry::voxel`]), split
 //!    into subregions ([`volume::subregions`]), each with its genus.
 //! 2. For each occupied box (1..3 cells along X, 1..2 along Y and Z; coarsest
-//!    first; or only the full 3x2x2 grid split by the caller's ratios): split the
+//!    first; each also with its boundaries where the part's outline changes,
+//!    the input warped so that they fall on the equal grid, [`splits`]; or only
+//!    the full 3x2x2 grid split by the caller's ratios): split the
 //!    aligned bounding box into subregions, measure each one's genus (on
 //!    majority-filtered voxels) and openings ([`openings`]), and take its
 //!    feasible labels (empty -> null; genus 0 -> cube, the six BHC and the three THC; genus 1 ->
@@ -17,14 +19,17 @@
 //!    solid) and verified (GOCC + TCV), all in one batch.
 //! 4. Global stage: products of the kept labels whose assembly is valid and has the
 //!    input's genus are ranked by geometric fit averaged over their cells; the best
-//!    ones pass the occupancy pre-check, are diffused in one batch and verified (a
+//!    ones pass the occupancy pre-check and the fit limit (against the best of all
+//!    boxes, compared in a length common to them, [`rank::box_scale`]), are
+//!    diffused in one batch and verified (a
 //!    failing one a second time with the visible prior; a cell whose subregion
 //!    shows its label's hole is judged against labels of the input's genus only,
 //!    `VerifyOptions::same_genus_rivals`); of the verified candidates, the one
 //!    with the fewest cells whose label their subregion's openings do not carry
 //!    (with `opening_labels`), then the lowest mean cell fit, is chosen.
 //!
-//! By concern: the temporary volume and its subregions ([`volume`]); each box's
+//! By concern: the temporary volume and its subregions ([`volume`]); the boxes'
+//! boundaries fitted to the part ([`splits`]); each box's
 //! subregions, feasible labels and candidate assemblies ([`boxes`]); the fits that
 //! rank labels, candidates and boxes ([`rank`]); the local stage (`local.rs`); the
 //! boxes tried in order with the global stage (`global.rs`).
@@ -35,6 +40,7 @@ mod global;
 mod local;
 pub mod openings;
 pub mod rank;
+pub mod splits;
 pub mod volume;
 
 use super::generate::{finish, prepare_input, Candidate, OrientationSearch, PolycubeOptions, PolycubeResult, PolycubeTimings, PreparedInput, Stage, FIT_SAMPLES};
@@ -143,11 +149,17 @@ pub struct AutoOptions {
     /// them one to two seconds a part: BENCHMARKS.md "Boxes in the other
     /// frames").
     pub axis_frames: bool,
+    /// Also analyse each box of the aligned frame with its cell boundaries where
+    /// the part's cross-section changes ([`splits`]: a channel's sides and floor, a
+    /// shoulder), the input warped so that they fall on the equal grid, when they
+    /// are at least [`splits::MIN_SHIFT`] of the box away from the equal split's
+    /// (default true: BENCHMARKS.md "Splits fitted to the part").
+    pub fitted_splits: bool,
 }
 
 impl Default for AutoOptions {
     fn default() -> Self {
-        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 5, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false, opening_labels: true, axis_frames: false }
+        AutoOptions { resolution: 48, min_fill: 0.04, null_fill: 0.15, local_keep: 5, local_diffusion: true, max_global: 16, finer_box_factor: 0.8, max_boxes: 2, local_steps: 25, joint_labels: false, register_cells: false, opening_labels: true, axis_frames: false, fitted_splits: true }
     }
 }
 
@@ -173,6 +185,11 @@ pub struct BoxResult {
     /// "+z+x+y": along its Z; see [`frames`]).
     pub frame: String,
     pub ratios: SplitRatios,
+    /// The box's boundaries are fitted to the part ([`splits`]; `ratios` says
+    /// where): its subregions, fits and candidates are those of the input warped
+    /// so that they fall on the equal grid.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub fitted: bool,
     pub locals: Vec<LocalResult>,
     /// Global candidates with the input's genus (before the cap).
     pub candidates: usize,
@@ -197,7 +214,8 @@ impl BoxResult {
             Some(2) => " (X along the input's Z)",
             _ => "",
         };
-        format!("{}x{}x{}{along}", self.dims[0], self.dims[1], self.dims[2])
+        let fitted = if self.fitted { " (splits fitted to the part)" } else { "" };
+        format!("{}x{}x{}{along}{fitted}", self.dims[0], self.dims[1], self.dims[2])
     }
 }
 
@@ -215,6 +233,9 @@ pub struct AutoReport {
     pub chosen_box: Option<[usize; 3]>,
     /// The frame of the box last tried ([`BoxResult::frame`]).
     pub chosen_frame: Option<String>,
+    /// Whether the box last tried has splits fitted to the part ([`BoxResult::fitted`]).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub chosen_fitted: bool,
     /// Why no candidate was formed at all (no occupied box and labelling of the grid
     /// holds the input's genus and subregions); None when some box had candidates.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -292,6 +313,28 @@ pub fn generate_auto(
         let from = boxes.len();
         boxes.extend(boxes::analyse_boxes(&runs, &other_shapes, (0.2, 0.3), &mut report, progress)?);
         rank::rank_candidates(&runs, &mut boxes, from, &mut report);
+    }
+    // the aligned frame's boxes with splits fitted to the part, one warped input
+    // per distinct warp
+    let warps: Vec<(splits::AxisWarp, Vec<[usize; 3]>)> = if ratios.is_none() && aopts.fitted_splits { fitted_warps(&volume, &aligned_shapes) } else { Vec::new() };
+    let warped: Vec<PreparedInput> = warps.iter().map(|(w, _)| splits::warp_input(&input, w)).collect();
+    let warped_volumes: Vec<TemporaryVolume> = warped.iter().map(|t| volume::measure(t, aopts)).collect::<Result<_>>()?;
+    if !warps.is_empty() {
+        let from = boxes.len();
+        let mut shapes = Vec::new();
+        for ((inp, vol), (_, dims)) in warped.iter().zip(&warped_volumes).zip(&warps) {
+            shapes.extend(dims.iter().map(|d| (runs.len(), SplitRatios::equal(d[0], d[1], d[2]))));
+            runs.push(Run::new(inp, vol, inp, frames::FRAMES[0], input_genus, opts, aopts, &global_opts));
+        }
+        let first_run = runs.len() - warps.len();
+        boxes.extend(boxes::analyse_boxes(&runs, &shapes, (0.3, 0.35), &mut report, progress)?);
+        for (b, w) in report.boxes[from..].iter_mut().zip(&boxes[from..]) {
+            b.fitted = true;
+            b.ratios = warps[w.frame - first_run].0.ratios();
+        }
+        rank::rank_candidates(&runs, &mut boxes, from, &mut report);
+    }
+    if more || !warps.is_empty() {
         boxes::sort_boxes(&mut boxes, &mut report.boxes);
     }
     timings.precheck += t0.elapsed().as_secs_f64();
@@ -312,10 +355,27 @@ pub fn generate_auto(
     Ok((result, report))
 }
 
+/// The distinct warps of the boxes of `shapes` (the aligned frame's) whose
+/// boundaries fitted to the part differ from the equal split ([`splits::fitted_box`]),
+/// each with the dims of its boxes.
+fn fitted_warps(volume: &TemporaryVolume, shapes: &[(usize, SplitRatios)]) -> Vec<(splits::AxisWarp, Vec<[usize; 3]>)> {
+    let mut out: Vec<(splits::AxisWarp, Vec<[usize; 3]>)> = Vec::new();
+    for (_, r) in shapes {
+        let dims = r.dims();
+        let Some(inner) = splits::fitted_box(&volume.clean, volume.vol.lo, volume.vol.h, &volume.bb, dims) else { continue };
+        let w = splits::AxisWarp::new(&volume.bb, &inner);
+        match out.iter_mut().find(|(x, _)| *x == w) {
+            Some((_, d)) => d.push(dims),
+            None => out.push((w, vec![dims])),
+        }
+    }
+    out
+}
+
 impl AutoReport {
     /// The record of the box last tried (its dims and frame), if any.
     pub fn chosen(&self) -> Option<&BoxResult> {
-        self.boxes.iter().find(|b| Some(b.dims) == self.chosen_box && Some(&b.frame) == self.chosen_frame.as_ref())
+        self.boxes.iter().find(|b| Some(b.dims) == self.chosen_box && Some(&b.frame) == self.chosen_frame.as_ref() && b.fitted == self.chosen_fitted)
     }
 
     /// The report of a run on `volume`, before any box.
@@ -330,6 +390,7 @@ impl AutoReport {
             boxes: Vec::new(),
             chosen_box: None,
             chosen_frame: None,
+            chosen_fitted: false,
             no_candidate: None,
         }
     }

@@ -246,6 +246,7 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
         dims: [2, 1, 1],
         frame: "+x+y+z".into(),
         ratios: SplitRatios::equal(2, 1, 1),
+        fitted: false,
         locals: vec![local(0, &[]), local(1, &["cube"])],
         candidates: 4,
         best_fit: Some(0.02),
@@ -263,6 +264,7 @@ fn a_refusal_names_the_nearest_candidates_and_what_the_user_could_give() {
         no_candidate: None,
         chosen_frame: chosen.map(|_| "+x+y+z".into()),
         chosen_box: chosen,
+        chosen_fitted: false,
     };
     // the box was tried: its local failures, the nearest candidates, what to give
     let msg = auto_failure(&r, &report(Some([2, 1, 1]), None)).expect("a refusal").to_string();

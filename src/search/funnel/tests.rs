@@ -71,10 +71,11 @@ fn report(a: LocalResult, b: LocalResult, chosen: bool) -> AutoReport {
         volume: 1.0,
         surface_volume: 1.0,
         volume_relative_error: 0.0,
-        boxes: vec![BoxResult { dims: [2, 1, 1], frame: "+x+y+z".into(), ratios: SplitRatios::equal(2, 1, 1), locals: vec![a, b], candidates: 6, best_fit: Some(0.01), best_fit_common: Some(0.01), joint_candidates: 0, refused: None }],
+        boxes: vec![BoxResult { dims: [2, 1, 1], frame: "+x+y+z".into(), ratios: SplitRatios::equal(2, 1, 1), fitted: false, locals: vec![a, b], candidates: 6, best_fit: Some(0.01), best_fit_common: Some(0.01), joint_candidates: 0, refused: None }],
         no_candidate: None,
         chosen_box: chosen.then_some([2, 1, 1]),
         chosen_frame: chosen.then(|| "+x+y+z".into()),
+        chosen_fitted: false,
     }
 }
 
