@@ -153,7 +153,8 @@ pub struct AutoOptions {
     /// the part's cross-section changes ([`splits`]: a channel's sides and floor, a
     /// shoulder), the input warped so that they fall on the equal grid, when they
     /// are at least [`splits::MIN_SHIFT`] of the box away from the equal split's
-    /// (default true: BENCHMARKS.md "Splits fitted to the part").
+    /// (default true: BENCHMARKS.md "Boxes compared in one length, splits
+    /// fitted to the part").
     pub fitted_splits: bool,
 }
 

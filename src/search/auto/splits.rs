@@ -1,12 +1,12 @@
 //! Splits fitted to the part: boxes whose cell boundaries sit where the part's
-//! cross-section changes, instead of at equal fractions of its bounding box.
+//! cross-section's outline changes, instead of at equal fractions of its bounding box.
 //!
 //! A real part's features rarely fall on thirds or halves of its bounding box: a
 //! block with a channel across its top has the channel's sides at a quarter and
 //! three quarters of its length and its floor at half its height; a rod's eyes end
 //! where its shaft begins. Equal cells cut such features in two, and no label of
-//! the cells that hold half a feature fits (BENCHMARKS.md "Splits fitted to the
-//! part").
+//! the cells that hold half a feature fits (BENCHMARKS.md "Boxes compared in
+//! one length, splits fitted to the part").
 //!
 //! Along each axis the outline of the temporary volume's section (the bounding
 //! rectangle of its majority-filtered voxels) is compared layer by layer
