@@ -150,7 +150,7 @@ pub struct AutoOptions {
     /// frames").
     pub axis_frames: bool,
     /// Also analyse each box of the aligned frame with its cell boundaries where
-    /// the part's cross-section changes ([`splits`]: a channel's sides and floor, a
+    /// the outline of the part's cross-section changes ([`splits`]: a channel's sides, a
     /// shoulder), the input warped so that they fall on the equal grid, when they
     /// are at least [`splits::MIN_SHIFT`] of the box away from the equal split's
     /// (default true: BENCHMARKS.md "Boxes compared in one length, splits
