@@ -360,10 +360,11 @@ pub fn generate_auto(
 /// boundaries fitted to the part differ from the equal split ([`splits::fitted_box`]),
 /// each with the dims of its boxes.
 fn fitted_warps(volume: &TemporaryVolume, shapes: &[(usize, SplitRatios)]) -> Vec<(splits::AxisWarp, Vec<[usize; 3]>)> {
+    let changes = splits::outline_changes(&volume.clean, volume.vol.lo, volume.vol.h);
     let mut out: Vec<(splits::AxisWarp, Vec<[usize; 3]>)> = Vec::new();
     for (_, r) in shapes {
         let dims = r.dims();
-        let Some(inner) = splits::fitted_box(&volume.clean, volume.vol.lo, volume.vol.h, &volume.bb, dims) else { continue };
+        let Some(inner) = splits::fitted_box(&changes, &volume.bb, dims) else { continue };
         let w = splits::AxisWarp::new(&volume.bb, &inner);
         match out.iter_mut().find(|(x, _)| *x == w) {
             Some((_, d)) => d.push(dims),

@@ -24,8 +24,8 @@
 use super::super::generate::PreparedInput;
 use crate::geometry::{Aabb, Alignment, SurfaceSample, TriMesh, VoxelGrid};
 
-/// A layer boundary is a candidate split where at least this share of the larger
-/// section changes across it.
+/// A layer boundary is a candidate split where the outline changes at least this
+/// much across it ([`section_changes`]).
 pub const MIN_CHANGE: f64 = 0.1;
 /// No fitted cell is shorter than this share of the box along its axis.
 pub const MIN_CELL: f64 = 0.15;
@@ -117,17 +117,24 @@ pub fn fitted_points(changes: &[(f64, f64)], lo: f64, hi: f64, n: usize) -> Opti
     Some(taken)
 }
 
-/// The fitted boundaries of a box with `dims` cells in the bounding box `bb` of
-/// the grid `g` (voxels of edge `h` from `origin`), per axis: the fitted inner
-/// points where [`fitted_points`] finds them, else the equal ones; None when no
-/// axis is fitted at least [`MIN_SHIFT`] away from the equal split.
-pub fn fitted_box(g: &VoxelGrid, origin: [f64; 3], h: f64, bb: &Aabb, dims: [usize; 3]) -> Option<[Vec<f64>; 3]> {
+/// The [`section_changes`] of the grid `g` (voxels of edge `h` from `origin`)
+/// along each axis, at their positions in the axis's coordinate: measured once
+/// and shared by every box.
+pub fn outline_changes(g: &VoxelGrid, origin: [f64; 3], h: f64) -> [Vec<(f64, f64)>; 3] {
+    std::array::from_fn(|a| section_changes(g, a).into_iter().map(|(k, c)| (origin[a] + k as f64 * h, c)).collect())
+}
+
+/// The fitted boundaries of a box with `dims` cells in the bounding box `bb`,
+/// from the outline's changes along each axis ([`outline_changes`]), per axis:
+/// the fitted inner points where [`fitted_points`] finds them, else the equal
+/// ones; None when no axis is fitted at least [`MIN_SHIFT`] away from the equal
+/// split.
+pub fn fitted_box(changes: &[Vec<(f64, f64)>; 3], bb: &Aabb, dims: [usize; 3]) -> Option<[Vec<f64>; 3]> {
     let mut shifted = false;
     let inner: [Vec<f64>; 3] = std::array::from_fn(|a| {
         let (lo, hi) = (bb.min[a], bb.max[a]);
         let equal: Vec<f64> = (1..dims[a]).map(|k| lo + (hi - lo) * k as f64 / dims[a] as f64).collect();
-        let changes: Vec<(f64, f64)> = section_changes(g, a).into_iter().map(|(k, c)| (origin[a] + k as f64 * h, c)).collect();
-        match fitted_points(&changes, lo, hi, dims[a]) {
+        match fitted_points(&changes[a], lo, hi, dims[a]) {
             Some(p) => {
                 if p.iter().zip(&equal).any(|(x, e)| (x - e).abs() >= MIN_SHIFT * (hi - lo)) {
                     shifted = true;
@@ -224,7 +231,7 @@ mod tests {
         // its floor at half of 20 voxels' height
         let g = channel_block(40, 20, 10, 30, 10);
         let bb = Aabb { min: [0.0; 3], max: [40.0, 4.0, 20.0] };
-        let inner = fitted_box(&g, [0.0; 3], 1.0, &bb, [3, 1, 2]).expect("fitted");
+        let inner = fitted_box(&outline_changes(&g, [0.0; 3], 1.0), &bb, [3, 1, 2]).expect("fitted");
         assert_eq!(inner[0], vec![10.0, 30.0]);
         assert!(inner[1].is_empty());
         assert_eq!(inner[2], vec![10.0]);
@@ -243,10 +250,10 @@ mod tests {
         // an L whose step is at the half: the equal box already has it
         let g = channel_block(40, 20, 20, 40, 10);
         let bb = Aabb { min: [0.0; 3], max: [40.0, 4.0, 20.0] };
-        assert!(fitted_box(&g, [0.0; 3], 1.0, &bb, [2, 1, 2]).is_none());
+        assert!(fitted_box(&outline_changes(&g, [0.0; 3], 1.0), &bb, [2, 1, 2]).is_none());
         // a uniform block has no peak at all
         let full = channel_block(40, 20, 0, 0, 0);
-        assert!(fitted_box(&full, [0.0; 3], 1.0, &bb, [3, 1, 2]).is_none());
+        assert!(fitted_box(&outline_changes(&full, [0.0; 3], 1.0), &bb, [3, 1, 2]).is_none());
     }
 
     #[test]
@@ -264,7 +271,7 @@ mod tests {
         }
         let bb = Aabb { min: [0.0; 3], max: [42.0, 4.0, 10.0] };
         assert!(section_changes(&g, 0).iter().all(|&(_, c)| c == 0.0));
-        assert!(fitted_box(&g, [0.0; 3], 1.0, &bb, [3, 1, 1]).is_none());
+        assert!(fitted_box(&outline_changes(&g, [0.0; 3], 1.0), &bb, [3, 1, 1]).is_none());
     }
 
     #[test]
@@ -274,6 +281,6 @@ mod tests {
         let bb = Aabb { min: [0.0; 3], max: [40.0, 4.0, 20.0] };
         let ch: Vec<(f64, f64)> = section_changes(&g, 0).into_iter().map(|(k, c)| (k as f64, c)).collect();
         assert_eq!(fitted_points(&ch, 0.0, 40.0, 2), None);
-        assert!(fitted_box(&g, [0.0; 3], 1.0, &bb, [2, 1, 1]).is_none());
+        assert!(fitted_box(&outline_changes(&g, [0.0; 3], 1.0), &bb, [2, 1, 1]).is_none());
     }
 }
