@@ -1,6 +1,6 @@
 //! Hex-mesh benchmark over the real test meshes (BENCHMARKS.md "Hex mesh").
 //!
-//! cargo bench --bench hex -- [FILTER...] [--level N] [--levels 1-4] [--out DIR] [--info] [--surface-map charts]
+//! cargo bench --bench hex -- [FILTER...] [--level N] [--levels 1-4] [--out DIR] [--info] [--surface-map charts|best]
 //!
 //! For every model whose name contains one of the filters (all when none): load,
 //! PCA-align, map onto the hand-chosen context, build the hex mesh and print one
@@ -68,6 +68,7 @@ fn run() {
             "--surface-map" => {
                 opts.map.surface_map = match args[i + 1].as_str() {
                     "charts" => sddpm::hex::SurfaceMap::Charts,
+                    "best" => sddpm::hex::SurfaceMap::Best,
                     _ => sddpm::hex::SurfaceMap::Projection,
                 };
                 i += 1;

@@ -264,3 +264,40 @@ fn the_chart_surface_map_falls_back_to_the_projection_with_the_reason() {
     let js = sddpm::hex::report_json(&r);
     assert_eq!(js["surface_map"]["method"], "projection", "{js}");
 }
+
+#[test]
+fn the_best_surface_map_keeps_the_charts_mesh_that_meets_the_goals_and_ranks_both_when_it_does_not() {
+    let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let inp = input(&cube, warped(polycube_surface(&cube, 4), 0.01));
+    let mut opts = HexOptions::default();
+    assert_eq!(opts.map.surface_map, sddpm::hex::SurfaceMap::Best, "the default");
+    opts.map.level = Some(1);
+    // the charts' mesh meets the goals: it is kept and the projection is not built
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    assert_eq!(opts.goals.missed(&r), 0);
+    assert_eq!(r.surface_map.method, "charts");
+    let tried = &r.surface_map.tried;
+    assert_eq!(tried.len(), 1, "{tried:?}");
+    assert!(tried[0].kept && tried[0].method == "charts" && tried[0].goals_missed == 0, "{tried:?}");
+    // a goal neither meets: both maps are meshed, the better by the goals kept
+    opts.goals.hausdorff = 1e-12;
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    let tried = &r.surface_map.tried;
+    assert_eq!(tried.iter().map(|t| t.method.as_str()).collect::<Vec<_>>(), ["charts", "projection"], "{tried:?}");
+    assert_eq!(tried.iter().filter(|t| t.kept).count(), 1, "{tried:?}");
+    let kept = tried.iter().find(|t| t.kept).unwrap();
+    assert_eq!(kept.method, r.surface_map.method);
+    assert_eq!((kept.elements, kept.inverted), (r.quality.elements, r.quality.inverted));
+    assert_eq!(kept.hausdorff_relative, r.hausdorff_relative);
+    let other = tried.iter().find(|t| !t.kept).unwrap();
+    let key = |t: &sddpm::hex::report::SurfaceMapTry| (t.inverted, t.goals_missed);
+    assert!(key(kept) <= key(other), "{tried:?}");
+    let js = sddpm::hex::report_json(&r);
+    assert_eq!(js["surface_map"]["tried"].as_array().map(Vec::len), Some(2), "{js}");
+    // charts that cannot be built: the projection's mesh alone, the reason recorded
+    let thc = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let r = build_hex_mesh(&input(&thc, polycube_surface(&cube, 3)), &opts, &mut NoProgress).unwrap();
+    assert_eq!(r.surface_map.method, "projection");
+    assert!(r.surface_map.why.is_some());
+    assert_eq!(r.surface_map.tried.len(), 1);
+}

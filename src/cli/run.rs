@@ -127,7 +127,7 @@ pub struct HexArgs {
     /// Fix the octree subdivision level (default: chosen by the stopping rule).
     #[arg(long, help_heading = "Mesh size and quality goals")]
     pub level: Option<u32>,
-    /// Surface map of the polycube path: projection (closest facing point and relaxation, the default) or charts (inverse chart maps; the projection where a chart does not map; docs/hex.md).
+    /// Surface map of the polycube path: best (the default: the charts, and the projection too when their mesh misses a quality goal; the better mesh kept), charts (inverse chart maps; the projection where a chart does not map) or projection (closest facing point and relaxation); docs/hex.md.
     #[arg(long, value_name = "METHOD", help_heading = "Polycube")]
     pub surface_map: Option<String>,
     /// The grid-based fallback's first lattice: voxels along the longest bounding-box edge (default 24).
@@ -168,7 +168,8 @@ pub fn hex_options(a: &HexArgs, d: &HexDevArgs, hex: &mut HexOptions) -> Result<
         None => {}
         Some("projection") => hex.map.surface_map = SurfaceMap::Projection,
         Some("charts") => hex.map.surface_map = SurfaceMap::Charts,
-        Some(o) => return Err(Error::InvalidArgument(format!("--surface-map must be projection or charts, got {o:?}"))),
+        Some("best") => hex.map.surface_map = SurfaceMap::Best,
+        Some(o) => return Err(Error::InvalidArgument(format!("--surface-map must be projection, charts or best, got {o:?}"))),
     }
     if let Some(n) = a.voxel_resolution {
         hex.fallback.resolution = n;

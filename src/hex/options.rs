@@ -83,7 +83,7 @@ pub struct MapOptions {
     /// before mapping (default true).
     pub fit_planes: bool,
     /// How the boundary of the polycube's lattice mesh goes onto the input (default
-    /// [`SurfaceMap::Projection`]; docs/hex.md "Surface map from the charts").
+    /// [`SurfaceMap::Best`]; docs/hex.md "Surface map from the charts").
     pub surface_map: SurfaceMap,
 }
 
@@ -92,11 +92,17 @@ pub struct MapOptions {
 pub enum SurfaceMap {
     /// Closest facing point on the input, matched feature curves and corners,
     /// relaxation on the surface.
-    #[default]
     Projection,
     /// The inverse of the chart maps (one chart of the input per polycube face,
     /// mapped bijectively onto it); the projection where a chart does not map.
     Charts,
+    /// The charts first; when their mesh misses a quality goal, the projection
+    /// too, and the mesh that ranks better by the goals is kept
+    /// ([`crate::hex::QualityGoals::beats`]; report.json `surface_map.tried`).
+    /// The default: neither map wins on every part (BENCHMARKS.md "Surface map:
+    /// charts and projection").
+    #[default]
+    Best,
 }
 
 /// Highest subdivision level of the polycube map.
@@ -104,7 +110,7 @@ pub const MAX_LEVEL: u32 = 6;
 
 impl Default for MapOptions {
     fn default() -> Self {
-        MapOptions { level: None, min_level: 2, max_level: 4, threshold: 0.005, stall_ratio: 0.75, use_correspondence: false, fit_planes: true, surface_map: SurfaceMap::Projection }
+        MapOptions { level: None, min_level: 2, max_level: 4, threshold: 0.005, stall_ratio: 0.75, use_correspondence: false, fit_planes: true, surface_map: SurfaceMap::Best }
     }
 }
 

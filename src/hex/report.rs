@@ -104,6 +104,28 @@ pub struct SurfaceMapReport {
     pub max_plane_shift: f64,
     /// Boundary quads of the mapped mesh whose normal opposes the surface normal.
     pub flipped_quads: usize,
+    /// Under [`crate::hex::SurfaceMap::Best`], every surface map meshed, in the
+    /// order tried, with the figures of its finished mesh (empty under the other
+    /// settings).
+    pub tried: Vec<SurfaceMapTry>,
+}
+
+/// One surface map meshed by [`crate::hex::SurfaceMap::Best`] and its mesh's figures.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SurfaceMapTry {
+    /// "charts" or "projection".
+    pub method: String,
+    pub level: u32,
+    pub elements: usize,
+    pub inverted: usize,
+    pub min_scaled_jacobian: f64,
+    pub mean_scaled_jacobian: f64,
+    pub hausdorff_relative: f64,
+    /// Quality goals the mesh misses.
+    pub goals_missed: usize,
+    pub seconds: f64,
+    /// Whether this mesh is the one returned.
+    pub kept: bool,
 }
 
 /// The result of the hex stage.

@@ -134,7 +134,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("hex.map.stall_ratio", Number, false, "Stopping rule: also stop when a level's measure is above this fraction of the previous level's"),
     opt("hex.map.use_correspondence", Bool, false, "Seed the surface map with the diffusion correspondence (never for an unverified candidate)"),
     opt("hex.map.fit_planes", Bool, false, "Without a correspondence, fit the polycube's sub-voxel planes to the input before mapping"),
-    opt("hex.map.surface_map", Str, false, "How the polycube's boundary goes onto the input: \"Projection\" (closest facing point and relaxation) or \"Charts\" (inverse chart maps; the projection where a chart does not map)"),
+    opt("hex.map.surface_map", Str, false, "How the polycube's boundary goes onto the input: \"Projection\" (closest facing point and relaxation), \"Charts\" (inverse chart maps; the projection where a chart does not map) or \"Best\" (the charts, and the projection too when their mesh misses a goal; the better kept)"),
     opt("hex.surface.feature_angle", Number, false, "Dihedral angle (degrees) above which an input edge is a sharp feature"),
     opt("hex.surface.min_feature_length", Number, false, "Feature curves shorter than this fraction of the bounding-box diagonal are ignored"),
     opt("hex.surface.feature_median_angle", Number, false, "Feature curves whose median dihedral angle (degrees, 0 to 180) is below this are ignored"),
@@ -408,7 +408,7 @@ mod tests {
         assert_eq!(o.hex.map.level, None);
         o.set_option("polycube.orientations", OptionValue::String("SignFlips".into())).unwrap();
         assert_eq!(o.option("polycube.orientations").unwrap(), OptionValue::String("SignFlips".into()));
-        assert_eq!(o.option("hex.map.surface_map").unwrap(), OptionValue::String("Projection".into()));
+        assert_eq!(o.option("hex.map.surface_map").unwrap(), OptionValue::String("Best".into()));
         o.set_option("hex.map.surface_map", OptionValue::String("Charts".into())).unwrap();
         assert_eq!(o.hex.map.surface_map, crate::hex::SurfaceMap::Charts);
         assert!(o.set_option("hex.map.surface_map", OptionValue::String("Nearest".into())).is_err());

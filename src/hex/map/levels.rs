@@ -58,7 +58,7 @@ struct Start<'a> {
 pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, progress: &mut dyn Progress) -> Result<Mapped> {
     let grid = input.context.assemble();
     let (mut start, warp_report) = start(input, mesh_n, &grid, fr, opts);
-    let why = if opts.map.surface_map == SurfaceMap::Charts {
+    let why = if matches!(opts.map.surface_map, SurfaceMap::Charts | SurfaceMap::Best) {
         match chart_inverse(input) {
             Ok(ci) => {
                 start.charts = Some(ci);
@@ -81,6 +81,7 @@ pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &
         planes_fitted: warp_report.planes_fitted,
         max_plane_shift: warp_report.max_shift,
         flipped_quads: 0,
+        tried: Vec::new(),
     };
     let max_level = opts.map.level.unwrap_or(opts.map.max_level);
     let min_level = opts.map.level.unwrap_or(opts.map.min_level.min(max_level));

@@ -33,12 +33,13 @@ mod levels;
 mod warp;
 
 use crate::context::{context_frame, Context};
-use crate::error::{check_progress, Error, Progress, Result};
+use crate::error::{check_progress, Error, Progress, Result, SubProgress};
 use crate::geometry::{Aabb, Alignment};
 use crate::hex::frame::Affine;
-use crate::hex::frames::working_frames;
+use crate::hex::frames::{working_frames, Frames};
+use crate::hex::report::SurfaceMapTry;
 use crate::hex::quality::{improve, MapStage};
-use crate::hex::{HexOptions, HexResult};
+use crate::hex::{HexOptions, HexResult, QualityGoals, SurfaceMap};
 use crate::mesh::TriMesh;
 use crate::polycube::assembly::occupied_cell_box;
 use std::time::Instant;
@@ -96,9 +97,56 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     check_input(input, opts)?;
     check_progress(progress, 0.0, "hex: setup")?;
     let (fr, mesh_n) = working_frames(&input.surface, &input.to_user, opts)?;
-    let mapped = levels::map_levels(input, mesh_n, &fr, opts, progress)?;
+    if opts.map.surface_map != SurfaceMap::Best {
+        return map_and_improve(input, mesh_n, &fr, opts, t_all, progress);
+    }
+    // the charts first; the projection as well when their mesh misses a goal
+    // (and the charts did map: otherwise the first mesh already is the projection's)
+    let mut o = opts.clone();
+    o.map.surface_map = SurfaceMap::Charts;
+    let t = Instant::now();
+    let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
+    let charts = map_and_improve(input, mesh_n.clone(), &fr, &o, t_all, &mut sub)?;
+    let charts_s = t.elapsed().as_secs_f64();
+    if opts.goals.missed(&charts) == 0 || charts.surface_map.method != "charts" {
+        let mut r = charts;
+        r.surface_map.tried = vec![tried_map(&r, charts_s, true, &opts.goals)];
+        return Ok(r);
+    }
+    o.map.surface_map = SurfaceMap::Projection;
+    let t = Instant::now();
+    let mut sub = SubProgress { inner: progress, lo: 0.5, hi: 1.0 };
+    let projection = map_and_improve(input, mesh_n, &fr, &o, t_all, &mut sub)?;
+    let projection_s = t.elapsed().as_secs_f64();
+    let keep_projection = opts.goals.beats(&projection, Some(&charts));
+    let tried = vec![tried_map(&charts, charts_s, !keep_projection, &opts.goals), tried_map(&projection, projection_s, keep_projection, &opts.goals)];
+    let mut r = if keep_projection { projection } else { charts };
+    r.surface_map.tried = tried;
+    r.seconds_total = t_all.elapsed().as_secs_f64();
+    Ok(r)
+}
+
+/// Map the levels with `opts`' surface map and run the quality steps on the chosen one.
+fn map_and_improve(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
+    let mapped = levels::map_levels(input, mesh_n, fr, opts, progress)?;
     let stage = MapStage { surface_map: mapped.surface_map, levels: mapped.levels, fit: mapped.fit, lattice: None };
-    improve(mapped.level, mapped.targets, stage, &fr, opts, t_all, progress)
+    improve(mapped.level, mapped.targets, stage, fr, opts, t_all, progress)
+}
+
+/// The report entry of one surface map's finished mesh.
+fn tried_map(r: &HexResult, seconds: f64, kept: bool, goals: &QualityGoals) -> SurfaceMapTry {
+    SurfaceMapTry {
+        method: r.surface_map.method.clone(),
+        level: r.level,
+        elements: r.quality.elements,
+        inverted: r.quality.inverted,
+        min_scaled_jacobian: r.quality.min,
+        mean_scaled_jacobian: r.quality.mean,
+        hausdorff_relative: r.hausdorff_relative,
+        goals_missed: goals.missed(r),
+        seconds,
+        kept,
+    }
 }
 
 /// The checks of [`build_hex_mesh`]: a valid polycube, a surface with triangles,
