@@ -170,6 +170,10 @@ pub struct HexAttempt {
     /// `goals_missed` 3.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// The surface maps meshed for this candidate, with their meshes' figures
+    /// (`hex::SurfaceMap::Best`; empty for the fallback and the other settings).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub surface_maps: Vec<crate::hex::report::SurfaceMapTry>,
 }
 
 /// Everything [`run`] produced.
@@ -613,6 +617,7 @@ impl HexAttempt {
             goal_shortfall: goals.shortfall(r),
             seconds: started.elapsed().as_secs_f64(),
             error: None,
+            surface_maps: r.surface_map.tried.clone(),
         }
     }
 
@@ -629,6 +634,7 @@ impl HexAttempt {
             goal_shortfall: f64::NAN,
             seconds: started.elapsed().as_secs_f64(),
             error: Some(e.to_string()),
+            surface_maps: Vec::new(),
         }
     }
 }
