@@ -301,3 +301,31 @@ fn the_best_surface_map_keeps_the_charts_mesh_that_meets_the_goals_and_ranks_bot
     assert!(r.surface_map.why.is_some());
     assert_eq!(r.surface_map.tried.len(), 1);
 }
+
+#[test]
+fn a_mesh_that_misses_the_distance_goal_alone_is_also_meshed_one_level_finer() {
+    let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let inp = input(&cube, warped(polycube_surface(&cube, 4), 0.01));
+    let mut opts = HexOptions::default();
+    opts.map.max_level = 3;
+    // only the distance goal can be missed
+    opts.goals.min_scaled_jacobian = -0.99;
+    opts.goals.mean_scaled_jacobian = -0.99;
+    opts.goals.hausdorff = 1e-12;
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    let tried = &r.surface_map.tried;
+    let methods: Vec<&str> = tried.iter().map(|t| t.method.as_str()).collect();
+    assert_eq!(methods.len(), 3, "{tried:?}");
+    assert_eq!(&methods[..2], ["charts", "projection"], "{tried:?}");
+    let finer = &tried[2];
+    assert_eq!(finer.level, tried[0].level.max(tried[1].level) + 1, "{tried:?}");
+    assert!(finer.elements > tried[0].elements.max(tried[1].elements), "{tried:?}");
+    assert_eq!(tried.iter().filter(|t| t.kept).count(), 1, "{tried:?}");
+    let kept = tried.iter().find(|t| t.kept).unwrap();
+    assert_eq!((kept.level, kept.elements), (r.level, r.quality.elements), "{tried:?}");
+    // a level the caller fixed is kept as it is
+    opts.map.level = Some(1);
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    assert_eq!(r.level, 1);
+    assert!(r.surface_map.tried.iter().all(|t| t.level == 1), "{:?}", r.surface_map.tried);
+}

@@ -104,13 +104,15 @@ pub struct SurfaceMapReport {
     pub max_plane_shift: f64,
     /// Boundary quads of the mapped mesh whose normal opposes the surface normal.
     pub flipped_quads: usize,
-    /// Under [`crate::hex::SurfaceMap::Best`], every surface map meshed, in the
-    /// order tried, with the figures of its finished mesh (empty under the other
-    /// settings).
+    /// Every surface map and level meshed, in the order tried, with the figures
+    /// of its finished mesh: the charts and the projection under
+    /// [`crate::hex::SurfaceMap::Best`], and the level one finer when a mesh
+    /// missed the distance goal alone (empty when one mesh was built under
+    /// another setting).
     pub tried: Vec<SurfaceMapTry>,
 }
 
-/// One surface map meshed by [`crate::hex::SurfaceMap::Best`] and its mesh's figures.
+/// One mesh of the polycube path (a surface map at a level) and its figures.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SurfaceMapTry {
     /// "charts" or "projection".

@@ -97,16 +97,25 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     check_input(input, opts)?;
     check_progress(progress, 0.0, "hex: setup")?;
     let (fr, mesh_n) = working_frames(&input.surface, &input.to_user, opts)?;
-    if opts.map.surface_map != SurfaceMap::Best {
-        return map_and_improve(input, mesh_n, &fr, opts, t_all, progress);
-    }
-    // the charts first; the projection as well when their mesh misses a goal
-    // (and the charts did map: otherwise the first mesh already is the projection's)
+    let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.8 };
+    let r = if opts.map.surface_map == SurfaceMap::Best {
+        best_map(input, mesh_n.clone(), &fr, opts, t_all, &mut sub)?
+    } else {
+        map_and_improve(input, mesh_n.clone(), &fr, opts, t_all, &mut sub)?
+    };
+    let mut sub = SubProgress { inner: progress, lo: 0.8, hi: 1.0 };
+    finer_for_distance(r, input, mesh_n, &fr, opts, t_all, &mut sub)
+}
+
+/// [`SurfaceMap::Best`]: the charts first; the projection as well when their mesh
+/// misses a goal (and the charts did map: otherwise the first mesh already is the
+/// projection's); the mesh that ranks better by the goals is returned.
+fn best_map(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
     let mut o = opts.clone();
     o.map.surface_map = SurfaceMap::Charts;
     let t = Instant::now();
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
-    let charts = map_and_improve(input, mesh_n.clone(), &fr, &o, t_all, &mut sub)?;
+    let charts = map_and_improve(input, mesh_n.clone(), fr, &o, t_all, &mut sub)?;
     let charts_s = t.elapsed().as_secs_f64();
     if opts.goals.missed(&charts) == 0 || charts.surface_map.method != "charts" {
         let mut r = charts;
@@ -116,7 +125,7 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     o.map.surface_map = SurfaceMap::Projection;
     let t = Instant::now();
     let mut sub = SubProgress { inner: progress, lo: 0.5, hi: 1.0 };
-    let projection = map_and_improve(input, mesh_n, &fr, &o, t_all, &mut sub)?;
+    let projection = map_and_improve(input, mesh_n, fr, &o, t_all, &mut sub)?;
     let projection_s = t.elapsed().as_secs_f64();
     let keep_projection = opts.goals.beats(&projection, Some(&charts));
     let tried = vec![tried_map(&charts, charts_s, !keep_projection, &opts.goals), tried_map(&projection, projection_s, keep_projection, &opts.goals)];
@@ -124,6 +133,42 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     r.surface_map.tried = tried;
     r.seconds_total = t_all.elapsed().as_secs_f64();
     Ok(r)
+}
+
+/// One level finer than the stopping rule's when the mesh misses the distance
+/// goal alone (no inverted element, minimum and mean met): a finer level
+/// shortens the chords between boundary nodes, which is what the distance
+/// measures, while it does not mend badly shaped elements. Not with a level the
+/// caller fixed, above `map.max_level`, or when the finer level would pass
+/// `max_elements` (eight times the elements). The finer mesh, with the surface
+/// map that made `r`, is returned when it ranks better by the goals; both are
+/// listed in `surface_map.tried`.
+fn finer_for_distance(r: HexResult, input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
+    let goals = &opts.goals;
+    let next = r.level + 1;
+    let only_distance = !goals.misses_scaled_jacobian(&r) && !(r.hausdorff_relative <= goals.hausdorff);
+    if opts.map.level.is_some() || !only_distance || next > opts.map.max_level || r.quality.elements.saturating_mul(8) > opts.max_elements {
+        return Ok(r);
+    }
+    let mut o = opts.clone();
+    o.map.level = Some(next);
+    o.map.surface_map = if r.surface_map.method == "charts" { SurfaceMap::Charts } else { SurfaceMap::Projection };
+    let t = Instant::now();
+    let finer = map_and_improve(input, mesh_n, fr, &o, t_all, progress)?;
+    let finer_s = t.elapsed().as_secs_f64();
+    let keep_finer = goals.beats(&finer, Some(&r));
+    let mut tried = r.surface_map.tried.clone();
+    if tried.is_empty() {
+        tried.push(tried_map(&r, r.seconds_total, true, goals));
+    }
+    if keep_finer {
+        tried.iter_mut().for_each(|t| t.kept = false);
+    }
+    tried.push(tried_map(&finer, finer_s, keep_finer, goals));
+    let mut out = if keep_finer { finer } else { r };
+    out.surface_map.tried = tried;
+    out.seconds_total = t_all.elapsed().as_secs_f64();
+    Ok(out)
 }
 
 /// Map the levels with `opts`' surface map and run the quality steps on the chosen one.
