@@ -31,6 +31,16 @@ pub mod voxel;
 pub use bvh::{closest_point_on_triangle, Aabb, Bvh, ClosestPoint, SurfaceLocator};
 pub use trimesh::TriMesh;
 pub use voxel::VoxelGrid;
+
+/// Hasher state with fixed keys: hash maps and sets built with it iterate in an
+/// order that depends only on what was inserted (std's default state draws
+/// random keys per process), so code whose result follows an iteration order
+/// gives the same mesh for the same input on every run.
+pub type StableState = std::hash::BuildHasherDefault<std::collections::hash_map::DefaultHasher>;
+/// A hash map with [`StableState`].
+pub type StableHashMap<K, V> = std::collections::HashMap<K, V, StableState>;
+/// A hash set with [`StableState`].
+pub type StableHashSet<K> = std::collections::HashSet<K, StableState>;
 pub(crate) use union_find::UnionFind;
 
 use crate::error::{Error, Result};

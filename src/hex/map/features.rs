@@ -7,7 +7,7 @@ use crate::hex::grid::{normal_masks, LatticeHex};
 use crate::hex::surface::Surface;
 use crate::hex::work::Role;
 use crate::geometry::vec3::*;
-use std::collections::HashMap;
+use crate::geometry::{StableHashMap, StableHashSet};
 
 /// Key of a polycube edge chain: the lattice coordinates of its two end nodes in
 /// sub-voxel units times 2^20 (level independent), sorted.
@@ -62,9 +62,9 @@ pub fn chain_of(h: &LatticeHex, masks: &[u8], node: usize) -> Option<(ChainKey, 
 #[derive(Debug, Clone, Default)]
 pub struct FeatureMatch {
     /// Polycube corner (level-free lattice key) -> input corner vertex.
-    pub corners: HashMap<[u64; 3], u32>,
+    pub corners: StableHashMap<[u64; 3], u32>,
     /// Polycube edge chain -> input feature curve.
-    pub chains: HashMap<ChainKey, u32>,
+    pub chains: StableHashMap<ChainKey, u32>,
 }
 
 /// Match polycube corners and edge chains of a lattice mesh `h0` (level >= 1, so that
@@ -88,8 +88,8 @@ pub fn match_features(h0: &LatticeHex, pos_n: &[[f64; 3]], sn: &Surface, radius:
         }
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-    let mut used_v = std::collections::HashSet::new();
-    let mut used_c = std::collections::HashSet::new();
+    let mut used_v = StableHashSet::default();
+    let mut used_c = StableHashSet::default();
     for (_, v, c) in pairs {
         if used_v.contains(&v) || used_c.contains(&c) {
             continue;
@@ -99,7 +99,7 @@ pub fn match_features(h0: &LatticeHex, pos_n: &[[f64; 3]], sn: &Surface, radius:
         fm.corners.insert(level_free(h0, h0.node_lattice[v]), c);
     }
     // chains
-    let mut seen: HashMap<ChainKey, usize> = HashMap::new();
+    let mut seen: StableHashMap<ChainKey, usize> = StableHashMap::default();
     for v in 0..masks.len() {
         if let Some((key, axis)) = chain_of(h0, &masks, v) {
             seen.entry(key).or_insert(axis);
@@ -155,7 +155,7 @@ pub fn match_features(h0: &LatticeHex, pos_n: &[[f64; 3]], sn: &Surface, radius:
 pub fn match_placed_features(h: &LatticeHex, pos: &[[f64; 3]], sw: &Surface, eps: f64) -> FeatureMatch {
     let masks = normal_masks(h);
     let mut fm = FeatureMatch::default();
-    let mut chains: HashMap<ChainKey, Vec<usize>> = HashMap::new();
+    let mut chains: StableHashMap<ChainKey, Vec<usize>> = StableHashMap::default();
     for (v, &m) in masks.iter().enumerate() {
         if m.count_ones() >= 3 {
             let on = sw.features.corners.iter().find(|&&c| norm(sub(pos[v], sw.mesh.vertices[c as usize])) <= eps);

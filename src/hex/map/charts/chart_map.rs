@@ -15,7 +15,7 @@ use super::TutteWeights;
 use crate::error::{Error, Result};
 use crate::geometry::vec3::*;
 use crate::mesh::TriMesh;
-use std::collections::HashMap;
+use crate::geometry::{StableHashMap, StableHashSet};
 
 /// One chart mapped onto its face.
 #[derive(Debug, Clone)]
@@ -57,7 +57,7 @@ pub fn map_chart(
 ) -> Result<ChartMap> {
     let face = &pf.faces[f];
     let name = pf.name(f);
-    let corner_at: HashMap<usize, usize> = pf.corners.iter().enumerate().map(|(c, k)| (k.vertex, c)).collect();
+    let corner_at: StableHashMap<usize, usize> = pf.corners.iter().enumerate().map(|(c, k)| (k.vertex, c)).collect();
     let fcorners: Vec<Vec<usize>> =
         face.loops.iter().map(|l| l.iter().filter_map(|v| corner_at.get(v).copied()).collect()).collect();
     let annulus = face.loops.len() == 2 && fcorners.iter().all(|c| c.len() == 4);
@@ -77,14 +77,14 @@ pub fn map_chart(
         return Err(ctx(format!("it has {} boundary loops, its face {}", loops.len(), face.loops.len())));
     }
     let vertex_of = |c: usize| topo.corners[c].ok_or_else(|| ctx(format!("corner {c} has no input vertex")));
-    let mut fixed: HashMap<u32, [f64; 3]> = HashMap::new();
+    let mut fixed: StableHashMap<u32, [f64; 3]> = StableHashMap::default();
     for fc in &fcorners {
         let v0 = vertex_of(fc[0])?;
         let l = loops.iter().find(|l| l.contains(&v0)).ok_or_else(|| ctx(format!("corner {} (vertex {v0}) is not on the chart's boundary", fc[0])))?;
         fix_loop(mesh, pf, l, fc, &topo.corners, &mut fixed).map_err(ctx)?;
     }
     if annulus {
-        let on_boundary: std::collections::HashSet<u32> = loops.iter().flatten().copied().collect();
+        let on_boundary: StableHashSet<u32> = loops.iter().flatten().copied().collect();
         let corner_vertices: Vec<u32> = fcorners.iter().flatten().filter_map(|&c| topo.corners[c]).collect();
         let mut blocked = on_boundary.clone();
         for &oc in &fcorners[0] {
@@ -100,7 +100,7 @@ pub fn map_chart(
         }
     }
     let (vertices, positions) = tutte(mesh, &triangles, &fixed, weights).map_err(ctx)?;
-    let index: HashMap<u32, usize> = vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let index: StableHashMap<u32, usize> = vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
     let eps = 1e-12 * face.area.abs().max(1e-300);
     let (mut flipped, mut degenerate) = (0, 0);
     for &t in &triangles {
@@ -125,9 +125,9 @@ fn fix_loop(
     chart_loop: &[u32],
     fc: &[usize],
     corners: &[Option<u32>],
-    fixed: &mut HashMap<u32, [f64; 3]>,
+    fixed: &mut StableHashMap<u32, [f64; 3]>,
 ) -> std::result::Result<(), String> {
-    let pos_in_loop: HashMap<u32, usize> = chart_loop.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let pos_in_loop: StableHashMap<u32, usize> = chart_loop.iter().enumerate().map(|(i, &v)| (v, i)).collect();
     let mut at_loop: Vec<usize> = Vec::with_capacity(fc.len());
     for &c in fc {
         let v = corners[c].ok_or_else(|| format!("corner {c} has no input vertex"))?;
@@ -152,7 +152,7 @@ fn fix_loop(
 }
 
 /// Place the vertices of a run of input vertices on the segment a-b by arc length.
-fn place_run(mesh: &TriMesh, run: &[u32], a: [f64; 3], b: [f64; 3], fixed: &mut HashMap<u32, [f64; 3]>) {
+fn place_run(mesh: &TriMesh, run: &[u32], a: [f64; 3], b: [f64; 3], fixed: &mut StableHashMap<u32, [f64; 3]>) {
     let lens: Vec<f64> = run.windows(2).map(|w| norm(sub(mesh.vertices[w[1] as usize], mesh.vertices[w[0] as usize]))).collect();
     let total: f64 = lens.iter().sum();
     let mut acc = 0.0;
@@ -196,11 +196,11 @@ fn cut_path(
     triangles: &[u32],
     sources: &[(u32, f64)],
     targets: &[(u32, f64)],
-    blocked: &std::collections::HashSet<u32>,
+    blocked: &StableHashSet<u32>,
 ) -> Option<Vec<u32>> {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
-    let mut adj: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut adj: StableHashMap<u32, Vec<u32>> = StableHashMap::default();
     for &t in triangles {
         let tri = mesh.triangles[t as usize];
         for k in 0..3 {
@@ -208,10 +208,10 @@ fn cut_path(
             adj.entry(tri[(k + 1) % 3]).or_default().push(tri[k]);
         }
     }
-    let target: HashMap<u32, f64> = targets.iter().copied().collect();
-    let source: std::collections::HashSet<u32> = sources.iter().map(|s| s.0).collect();
-    let mut dist: HashMap<u32, f64> = HashMap::new();
-    let mut prev: HashMap<u32, u32> = HashMap::new();
+    let target: StableHashMap<u32, f64> = targets.iter().copied().collect();
+    let source: StableHashSet<u32> = sources.iter().map(|s| s.0).collect();
+    let mut dist: StableHashMap<u32, f64> = StableHashMap::default();
+    let mut prev: StableHashMap<u32, u32> = StableHashMap::default();
     let mut heap = BinaryHeap::new();
     for &(s, c) in sources {
         dist.insert(s, c);
@@ -253,14 +253,14 @@ fn cut_path(
 
 /// The boundary loops of a chart, in the triangles' orientation.
 fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<Vec<u32>>, String> {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut directed: StableHashMap<(u32, u32), u32> = StableHashMap::default();
     for &t in triangles {
         let tri = mesh.triangles[t as usize];
         for k in 0..3 {
             *directed.entry((tri[k], tri[(k + 1) % 3])).or_insert(0) += 1;
         }
     }
-    let mut next: HashMap<u32, u32> = HashMap::new();
+    let mut next: StableHashMap<u32, u32> = StableHashMap::default();
     for &(a, b) in directed.keys() {
         if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
             return Err(format!("its boundary passes vertex {a} twice (the chart is pinched there)"));
@@ -271,7 +271,7 @@ fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<
     }
     let mut starts: Vec<u32> = next.keys().copied().collect();
     starts.sort_unstable();
-    let mut seen: std::collections::HashSet<u32> = std::collections::HashSet::new();
+    let mut seen: StableHashSet<u32> = StableHashSet::default();
     let mut loops = Vec::new();
     for s in starts {
         if seen.contains(&s) {
@@ -297,7 +297,7 @@ fn chart_boundary(mesh: &TriMesh, triangles: &[u32]) -> std::result::Result<Vec<
 fn tutte(
     mesh: &TriMesh,
     triangles: &[u32],
-    fixed: &HashMap<u32, [f64; 3]>,
+    fixed: &StableHashMap<u32, [f64; 3]>,
     weights: TutteWeights,
 ) -> std::result::Result<(Vec<u32>, Vec<[f64; 3]>), String> {
     use faer::linalg::solvers::Solve;
@@ -306,9 +306,9 @@ fn tutte(
     vertices.sort_unstable();
     vertices.dedup();
     let free: Vec<u32> = vertices.iter().copied().filter(|v| !fixed.contains_key(v)).collect();
-    let row: HashMap<u32, usize> = free.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let row: StableHashMap<u32, usize> = free.iter().enumerate().map(|(i, &v)| (v, i)).collect();
     // weights w[(i, j)] of the directed edge i -> j
-    let mut w: HashMap<(u32, u32), f64> = HashMap::new();
+    let mut w: StableHashMap<(u32, u32), f64> = StableHashMap::default();
     let p = |v: u32| mesh.vertices[v as usize];
     for &t in triangles {
         let tri = mesh.triangles[t as usize];
@@ -335,7 +335,7 @@ fn tutte(
         }
     }
     let n = free.len();
-    let mut pos: HashMap<u32, [f64; 3]> = fixed.clone();
+    let mut pos: StableHashMap<u32, [f64; 3]> = fixed.clone();
     if n > 0 {
         let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
         let mut rhs = faer::Mat::<f64>::zeros(n, 3);

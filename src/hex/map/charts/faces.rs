@@ -7,7 +7,8 @@
 use crate::context::{context_frame, Context};
 use crate::error::{Error, Result};
 use crate::polycube::assembly::boundary;
-use std::collections::{BTreeSet, HashMap};
+use crate::geometry::StableHashMap;
+use std::collections::BTreeSet;
 
 /// Axis-direction code of a face: 0..6 = +X, -X, +Y, -Y, +Z, -Z.
 pub type Dir = u8;
@@ -157,7 +158,7 @@ pub fn polycube_faces(ctx: &Context) -> Result<PolycubeFaces> {
         (q.1, (qm.vertices[q.0[0] as usize][a] * 3.0).round() as i64)
     };
     // directed edge -> quad
-    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut directed: StableHashMap<(u32, u32), usize> = StableHashMap::default();
     for (i, q) in quads.iter().enumerate() {
         for k in 0..4 {
             directed.insert((q.0[k], q.0[(k + 1) % 4]), i);
@@ -182,7 +183,7 @@ pub fn polycube_faces(ctx: &Context) -> Result<PolycubeFaces> {
             }
         }
     }
-    let mut face_of_root: HashMap<usize, usize> = HashMap::new();
+    let mut face_of_root: StableHashMap<usize, usize> = StableHashMap::default();
     let mut quad_face = vec![0usize; quads.len()];
     let mut faces: Vec<PolyFace> = Vec::new();
     for i in 0..quads.len() {
@@ -217,7 +218,7 @@ pub fn polycube_faces(ctx: &Context) -> Result<PolycubeFaces> {
             vertex_faces[v as usize].insert(quad_face[i]);
         }
     }
-    let mut corner_of: HashMap<usize, usize> = HashMap::new();
+    let mut corner_of: StableHashMap<usize, usize> = StableHashMap::default();
     let mut corners: Vec<PolyCorner> = Vec::new();
     for (v, fs) in vertex_faces.iter().enumerate() {
         if fs.len() >= 3 {
@@ -265,11 +266,11 @@ pub fn polycube_faces(ctx: &Context) -> Result<PolycubeFaces> {
 fn face_loops(
     quads: &[([u32; 4], Dir)],
     quad_face: &[usize],
-    directed: &HashMap<(u32, u32), usize>,
+    directed: &StableHashMap<(u32, u32), usize>,
     f: usize,
     face: &PolyFace,
 ) -> Vec<Vec<usize>> {
-    let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut next: StableHashMap<u32, Vec<u32>> = StableHashMap::default();
     for &q in &face.quads {
         let vs = quads[q].0;
         for k in 0..4 {

@@ -8,6 +8,7 @@
 //! boundary by the same arc length between the same corner vertices.
 
 use super::faces::plane_coords;
+use crate::geometry::StableHashMap;
 use super::{ChartMap, Charts};
 use crate::geometry::vec3::*;
 use crate::mesh::TriMesh;
@@ -40,7 +41,7 @@ struct ChartGrid {
 
 impl ChartGrid {
     fn new(mesh: &TriMesh, map: &ChartMap, dir: u8) -> ChartGrid {
-        let index: std::collections::HashMap<u32, usize> = map.vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+        let index: StableHashMap<u32, usize> = map.vertices.iter().enumerate().map(|(i, &v)| (v, i)).collect();
         let mut tris = Vec::with_capacity(map.triangles.len());
         for &t in &map.triangles {
             let tri = mesh.triangles[t as usize];

@@ -8,7 +8,7 @@ use super::faces::{dir_normal, PolycubeFaces};
 use super::ChartOptions;
 use crate::geometry::vec3::*;
 use crate::mesh::TriMesh;
-use std::collections::HashMap;
+use crate::geometry::StableHashMap;
 
 /// Triangle adjacency and per-triangle geometry of the input.
 #[derive(Debug, Clone)]
@@ -38,7 +38,7 @@ impl TriGraph {
             normals.push(if l > 0.0 { scale(c, 1.0 / l) } else { [0.0; 3] });
             centroids.push(scale(add(add(p(t[0]), p(t[1])), p(t[2])), 1.0 / 3.0));
         }
-        let mut by_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(n * 2);
+        let mut by_edge: StableHashMap<(u32, u32), Vec<u32>> = StableHashMap::with_capacity_and_hasher(n * 2, Default::default());
         for (i, t) in mesh.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -186,7 +186,7 @@ pub fn remove_islands(g: &TriGraph, labels: &mut [u32], faces: usize) -> usize {
         // move the smallest island; the others are recomputed (moves merge them)
         let (_, island) = islands.swap_remove(0);
         let own = labels[island[0] as usize];
-        let mut shared: HashMap<u32, f64> = HashMap::new();
+        let mut shared: StableHashMap<u32, f64> = StableHashMap::default();
         for &t in &island {
             for &(u, _, len) in &g.neighbours[t as usize] {
                 let l = labels[u as usize];

@@ -6,7 +6,8 @@
 use super::faces::PolycubeFaces;
 use super::segment::{components, TriGraph};
 use crate::mesh::TriMesh;
-use std::collections::{BTreeSet, HashMap};
+use crate::geometry::StableHashMap;
+use std::collections::BTreeSet;
 use std::fmt;
 
 /// Measures of one chart (the triangles labelled with one face).
@@ -128,13 +129,13 @@ pub fn check_topology(mesh: &TriMesh, g: &TriGraph, pf: &PolycubeFaces, labels: 
 /// Corners: input vertices whose incident charts are exactly a polycube corner's faces;
 /// where several, the one nearest the corner (reported as ambiguous).
 fn find_corners(mesh: &TriMesh, pf: &PolycubeFaces, labels: &[u32], out: &mut ChartTopology) {
-    let mut around: HashMap<u32, BTreeSet<usize>> = HashMap::new();
+    let mut around: StableHashMap<u32, BTreeSet<usize>> = StableHashMap::default();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for &v in tri {
             around.entry(v).or_default().insert(labels[t] as usize);
         }
     }
-    let mut by_set: HashMap<Vec<usize>, Vec<u32>> = HashMap::new();
+    let mut by_set: StableHashMap<Vec<usize>, Vec<u32>> = StableHashMap::default();
     for (v, s) in around {
         if s.len() >= 3 {
             by_set.entry(s.into_iter().collect()).or_default().push(v);
