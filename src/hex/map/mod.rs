@@ -23,6 +23,9 @@
 //!
 //! [`build_hex_mesh`] maps the levels ([`levels`]), takes the one the stopping rule
 //! picks and hands it to the quality steps ([`crate::hex::quality::improve`]).
+//! By default it does so with the inverse chart maps and, when their mesh misses
+//! a quality goal, with the projection above as well, keeping the better mesh;
+//! a mesh that misses the distance goal alone is also built one level finer.
 //! Feature matching is in [`features`], the start embedding in [`warp`], the
 //! correspondence seed in [`correspondence`].
 
