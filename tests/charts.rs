@@ -8,7 +8,7 @@ use sddpm::geometry::vec3::*;
 use sddpm::hex::charts::{polycube_faces, segment_and_map, ChartOptions, PolycubeFaces};
 use sddpm::hex::grid::lattice_hex;
 use sddpm::hex::topology::{boundary_quads, HEX_EDGES};
-use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexMesh, HexOptions};
+use sddpm::hex::{build_hex_mesh, Affine, HexInput, HexMesh, HexOptions, MapMethod};
 use sddpm::mesh::TriMesh;
 use std::collections::HashMap;
 
@@ -205,7 +205,7 @@ fn chart_surface_map_is_on_the_input_and_in_the_right_chart(ctx: &Context, surfa
     opts.map.level = Some(1);
     opts.map.surface_map = sddpm::hex::SurfaceMap::Charts;
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
-    assert_eq!(r.surface_map.method, "charts", "{:?}", r.surface_map.why);
+    assert_eq!(r.surface_map.method, MapMethod::Charts, "{:?}", r.surface_map.why);
     assert_eq!(r.surface_map.why, None);
     // the polycube's corners and edges land on the input's feature corners and
     // sharp curves, which the quality steps then keep them on
@@ -258,7 +258,7 @@ fn the_chart_surface_map_falls_back_to_the_projection_with_the_reason() {
     opts.map.level = Some(1);
     opts.map.surface_map = sddpm::hex::SurfaceMap::Charts;
     let r = build_hex_mesh(&input(&thc, polycube_surface(&cube, 3)), &opts, &mut NoProgress).unwrap();
-    assert_eq!(r.surface_map.method, "projection");
+    assert_eq!(r.surface_map.method, MapMethod::Projection);
     let why = r.surface_map.why.clone().expect("the reason is recorded");
     assert!(why.contains("has no chart"), "{why}");
     let js = sddpm::hex::report_json(&r);
@@ -275,15 +275,15 @@ fn the_best_surface_map_keeps_the_charts_mesh_that_meets_the_goals_and_ranks_bot
     // the charts' mesh meets the goals: it is kept and the projection is not built
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     assert_eq!(opts.goals.missed(&r), 0);
-    assert_eq!(r.surface_map.method, "charts");
+    assert_eq!(r.surface_map.method, MapMethod::Charts);
     let tried = &r.surface_map.tried;
     assert_eq!(tried.len(), 1, "{tried:?}");
-    assert!(tried[0].kept && tried[0].method == "charts" && tried[0].goals_missed == 0, "{tried:?}");
+    assert!(tried[0].kept && tried[0].method == MapMethod::Charts && tried[0].goals_missed == 0, "{tried:?}");
     // a goal neither meets: both maps are meshed, the better by the goals kept
     opts.goals.hausdorff = 1e-12;
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     let tried = &r.surface_map.tried;
-    assert_eq!(tried.iter().map(|t| t.method.as_str()).collect::<Vec<_>>(), ["charts", "projection"], "{tried:?}");
+    assert_eq!(tried.iter().map(|t| t.method.name()).collect::<Vec<_>>(), ["charts", "projection"], "{tried:?}");
     assert_eq!(tried.iter().filter(|t| t.kept).count(), 1, "{tried:?}");
     let kept = tried.iter().find(|t| t.kept).unwrap();
     assert_eq!(kept.method, r.surface_map.method);
@@ -297,7 +297,7 @@ fn the_best_surface_map_keeps_the_charts_mesh_that_meets_the_goals_and_ranks_bot
     // charts that cannot be built: the projection's mesh alone, the reason recorded
     let thc = Context::parse("THC+Z,0,0,0,0,0,0,0,0,0,0,0").unwrap();
     let r = build_hex_mesh(&input(&thc, polycube_surface(&cube, 3)), &opts, &mut NoProgress).unwrap();
-    assert_eq!(r.surface_map.method, "projection");
+    assert_eq!(r.surface_map.method, MapMethod::Projection);
     assert!(r.surface_map.why.is_some());
     assert_eq!(r.surface_map.tried.len(), 1);
 }
@@ -314,7 +314,7 @@ fn a_mesh_that_misses_the_distance_goal_alone_is_also_meshed_one_level_finer() {
     opts.goals.hausdorff = 1e-12;
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     let tried = &r.surface_map.tried;
-    let methods: Vec<&str> = tried.iter().map(|t| t.method.as_str()).collect();
+    let methods: Vec<&str> = tried.iter().map(|t| t.method.name()).collect();
     assert_eq!(methods.len(), 3, "{tried:?}");
     assert_eq!(&methods[..2], ["charts", "projection"], "{tried:?}");
     let finer = &tried[2];

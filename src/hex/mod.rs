@@ -38,7 +38,7 @@ pub use frame::Affine;
 pub use goals::QualityGoals;
 pub use map::{build_hex_mesh, charts, HexInput};
 pub use options::{FallbackOptions, HexOption, HexOptions, InvalidHexOption, MapOptions, QualityOptions, SurfaceMap, SurfaceOptions};
-pub use report::{report_json, Domain, HexResult, LevelReport, Returned, SurfaceMapReport};
+pub use report::{report_json, Domain, HexResult, LevelReport, MapMethod, Returned, SurfaceMapReport};
 pub use stages::{Stage, StageDetails, StageReport};
 pub use voxel::build_voxel_hex_mesh;
 pub use work::MoveStats;

@@ -15,6 +15,37 @@ pub const HEX_VTK: &str = "hex.vtk";
 pub const HEX_MESH: &str = "hex.mesh";
 pub const HEX_K: &str = "hex.k";
 
+/// How a mesh's boundary went onto the input (report.json `surface_map.method`:
+/// "charts", "projection" or "lattice").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MapMethod {
+    /// The inverse chart maps of the polycube path.
+    Charts,
+    /// Closest facing point and relaxation on the surface (the polycube path).
+    #[default]
+    Projection,
+    /// The grid-based fallback's fit of its lattice.
+    Lattice,
+}
+
+impl MapMethod {
+    /// The name report.json and the benchmarks print.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapMethod::Charts => "charts",
+            MapMethod::Projection => "projection",
+            MapMethod::Lattice => "lattice",
+        }
+    }
+}
+
+impl std::fmt::Display for MapMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Where the elements come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Domain {
@@ -88,10 +119,8 @@ pub struct LevelReport {
 /// How the surface map was set up.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SurfaceMapReport {
-    /// How the boundary went onto the input: "charts" (inverse chart maps),
-    /// "projection" (closest facing point and relaxation) or "lattice" (the
-    /// grid-based fallback's fit).
-    pub method: String,
+    /// How the boundary went onto the input.
+    pub method: MapMethod,
     /// Why the projection was used where the charts were asked for (None otherwise).
     pub why: Option<String>,
     pub feature_curves: usize,
@@ -115,8 +144,8 @@ pub struct SurfaceMapReport {
 /// One mesh of the polycube path (a surface map at a level) and its figures.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SurfaceMapTry {
-    /// "charts" or "projection".
-    pub method: String,
+    /// [`MapMethod::Charts`] or [`MapMethod::Projection`].
+    pub method: MapMethod,
     pub level: u32,
     pub elements: usize,
     pub inverted: usize,

@@ -17,7 +17,7 @@ use crate::hex::frames::Frames;
 use crate::hex::grid::{boundary_faces_lattice, lattice_hex, prolong, LatticeHex};
 use crate::hex::quality::summary;
 use crate::hex::quality::untangle::untangle;
-use crate::hex::report::{LevelReport, SurfaceMapReport};
+use crate::hex::report::{LevelReport, MapMethod, SurfaceMapReport};
 use crate::hex::surface::Surface;
 use crate::hex::work::{boundary_graph, quad_normals, Level, Role, Work};
 use crate::hex::{topology, HexMesh, HexOptions, SurfaceMap};
@@ -71,7 +71,7 @@ pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &
         None
     };
     let smap = SurfaceMapReport {
-        method: if start.charts.is_some() { "charts" } else { "projection" }.into(),
+        method: if start.charts.is_some() { MapMethod::Charts } else { MapMethod::Projection },
         why,
         feature_curves: fr.sw.features.curves.len(),
         feature_corners: fr.sw.features.corners.len(),

@@ -40,7 +40,7 @@ use crate::error::{check_progress, Error, Progress, Result, SubProgress};
 use crate::geometry::{Aabb, Alignment};
 use crate::hex::frame::Affine;
 use crate::hex::frames::{working_frames, Frames};
-use crate::hex::report::SurfaceMapTry;
+use crate::hex::report::{MapMethod, SurfaceMapTry};
 use crate::hex::quality::{improve, MapStage};
 use crate::hex::{HexOptions, HexResult, QualityGoals, SurfaceMap};
 use crate::mesh::TriMesh;
@@ -120,7 +120,7 @@ fn best_map(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
     let charts = map_and_improve(input, mesh_n.clone(), fr, &o, t_all, &mut sub)?;
     let charts_s = t.elapsed().as_secs_f64();
-    if opts.goals.missed(&charts) == 0 || charts.surface_map.method != "charts" {
+    if opts.goals.missed(&charts) == 0 || charts.surface_map.method != MapMethod::Charts {
         let mut r = charts;
         r.surface_map.tried = vec![tried_map(&r, charts_s, true, &opts.goals)];
         return Ok(r);
@@ -155,7 +155,7 @@ fn finer_for_distance(r: HexResult, input: &HexInput, mesh_n: TriMesh, fr: &Fram
     }
     let mut o = opts.clone();
     o.map.level = Some(next);
-    o.map.surface_map = if r.surface_map.method == "charts" { SurfaceMap::Charts } else { SurfaceMap::Projection };
+    o.map.surface_map = if r.surface_map.method == MapMethod::Charts { SurfaceMap::Charts } else { SurfaceMap::Projection };
     let t = Instant::now();
     let finer = map_and_improve(input, mesh_n, fr, &o, t_all, progress)?;
     let finer_s = t.elapsed().as_secs_f64();
@@ -184,7 +184,7 @@ fn map_and_improve(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOpt
 /// The report entry of one surface map's finished mesh.
 fn tried_map(r: &HexResult, seconds: f64, kept: bool, goals: &QualityGoals) -> SurfaceMapTry {
     SurfaceMapTry {
-        method: r.surface_map.method.clone(),
+        method: r.surface_map.method,
         level: r.level,
         elements: r.quality.elements,
         inverted: r.quality.inverted,

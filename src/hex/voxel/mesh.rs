@@ -13,7 +13,7 @@ use crate::hex::frames::Frames;
 use crate::hex::grid::{boundary_faces_lattice, lattice_hex, normal_masks, LatticeHex};
 use crate::hex::lattice::LatticePlanes;
 use crate::hex::quality::{improve, summary, MapStage};
-use crate::hex::report::{HexResult, LevelReport, SurfaceMapReport};
+use crate::hex::report::{HexResult, LevelReport, MapMethod, SurfaceMapReport};
 use crate::hex::stages::{LatticeDetails, RefineStart, RefinementDetails, Revoxelised, ThinWall};
 use crate::hex::surface::Surface;
 use crate::hex::work::{boundary_graph, Level, Role, Work};
@@ -76,7 +76,7 @@ pub(super) fn mesh_lattice(
         seconds: t0.elapsed().as_secs_f64(),
     }];
     let smap = SurfaceMapReport {
-        method: "lattice".into(),
+        method: MapMethod::Lattice,
         feature_curves: sw.features.curves.len(),
         feature_corners: sw.features.corners.len(),
         ..Default::default()
