@@ -312,6 +312,8 @@ fn a_mesh_that_misses_the_distance_goal_alone_is_also_meshed_one_level_finer() {
     opts.goals.min_scaled_jacobian = -0.99;
     opts.goals.mean_scaled_jacobian = -0.99;
     opts.goals.hausdorff = 1e-12;
+    // the finer level alone (local refinement: the next test)
+    opts.map.local_refinement = 0;
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     let tried = &r.surface_map.tried;
     let methods: Vec<&str> = tried.iter().map(|t| t.method.name()).collect();
@@ -328,4 +330,73 @@ fn a_mesh_that_misses_the_distance_goal_alone_is_also_meshed_one_level_finer() {
     let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
     assert_eq!(r.level, 1);
     assert!(r.surface_map.tried.iter().all(|t| t.level == 1), "{:?}", r.surface_map.tried);
+}
+
+/// A box whose top face has a round bump off its centre: far from a coarse
+/// level's mesh there and nowhere else.
+fn bumped_box(k: usize) -> (Context, TriMesh) {
+    let cube = Context::parse("cube,0,0,0,0,0,0,0,0,0,0,0").unwrap();
+    let mut m = polycube_surface(&cube, k);
+    let bb0 = sddpm::geometry::Aabb::of_points(&m.vertices);
+    let s = bb0.size();
+    let c = [bb0.min[0] + 0.3 * s[0], bb0.min[1] + 0.3 * s[1]];
+    let r = 0.2 * s[0];
+    for p in m.vertices.iter_mut() {
+        let d = ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
+        if p[2] > bb0.max[2] - 1e-9 && d < r {
+            p[2] += 0.08 * s[2] * (1.0 - (d / r).powi(2)).powi(2);
+        }
+    }
+    // the input's box onto the occupied cells' box, as the hex stage's input is
+    let bb = sddpm::geometry::Aabb::of_points(&m.vertices);
+    let sz = bb.size();
+    for p in m.vertices.iter_mut() {
+        *p = std::array::from_fn(|a| bb0.min[a] + (p[a] - bb.min[a]) * s[a] / sz[a]);
+    }
+    (cube, m)
+}
+
+#[test]
+fn a_mesh_far_from_the_input_in_one_place_is_refined_there_alone() {
+    let (cube, surface) = bumped_box(24);
+    let inp = input(&cube, surface);
+    let mut opts = HexOptions::default();
+    opts.map.max_level = 2;
+    opts.map.min_level = 2;
+    opts.map.surface_map = sddpm::hex::SurfaceMap::Charts;
+    // only the distance goal can be missed, and the level's mesh misses it
+    opts.goals.min_scaled_jacobian = -0.99;
+    opts.goals.mean_scaled_jacobian = -0.99;
+    opts.map.local_refinement = 0;
+    let plain = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    assert_eq!(plain.level, 2);
+    opts.goals.hausdorff = 0.5 * plain.hausdorff_relative;
+    opts.map.local_refinement = 2;
+    let r = build_hex_mesh(&inp, &opts, &mut NoProgress).unwrap();
+    let tried = &r.surface_map.tried;
+    let local: Vec<_> = tried.iter().filter(|t| t.split_elements > 0).collect();
+    assert!(!local.is_empty(), "{tried:?}");
+    let level_elements = tried[0].elements;
+    for t in &local {
+        // refined around the bump, not everywhere: a fifth of the level at most
+        assert!(t.split_elements * 5 < level_elements, "{tried:?}");
+        assert!(t.elements > level_elements && t.inverted == 0, "{tried:?}");
+        assert_eq!(t.level, 2, "{tried:?}");
+    }
+    // the refined mesh is nearer the input than the level's, and it is the one kept
+    let best_local = local.iter().map(|t| t.hausdorff_relative).fold(f64::INFINITY, f64::min);
+    assert!(best_local < 0.8 * plain.hausdorff_relative, "{} -> {tried:?}", plain.hausdorff_relative);
+    assert!(r.hausdorff_relative <= best_local + 1e-12 && r.quality.elements > level_elements, "{tried:?}");
+    assert_eq!(r.quality.inverted, 0);
+    assert_eq!(tried.iter().filter(|t| t.kept).count(), 1, "{tried:?}");
+    // conforming: every boundary quad's edges are shared by exactly two boundary quads
+    let q = sddpm::hex::topology::boundary_quads(&r.mesh).unwrap();
+    let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
+    for b in &q {
+        for i in 0..4 {
+            let (a, c) = (b.nodes[i], b.nodes[(i + 1) % 4]);
+            *edges.entry((a.min(c), a.max(c))).or_default() += 1;
+        }
+    }
+    assert!(edges.values().all(|&n| n == 2), "the refined mesh's boundary is not closed and manifold");
 }

@@ -90,3 +90,26 @@ pub fn hausdorff(hex: &HexMesh, surface: &TriMesh, samples: usize) -> Hausdorff 
         mean_relative: d_hex.iter().sum::<f64>() / d_hex.len() as f64 / diag,
     }
 }
+
+/// The points where `mesh` (user coordinates) is farthest from the input of
+/// `fr`, in the working frame: input vertices and boundary nodes of the mesh at
+/// least `frac` times the largest such distance away (the two one-sided
+/// distances of the Hausdorff distance, at vertices and nodes), or at least
+/// `at_most` (working-frame units) away when that is less. Empty when the mesh
+/// lies on the input.
+pub fn far_points(mesh: &HexMesh, fr: &super::frames::Frames, frac: f64, at_most: f64) -> Vec<[f64; 3]> {
+    let Some(u_to_w) = fr.w_to_u.inverse() else { return Vec::new() };
+    let hw = HexMesh { nodes: mesh.nodes.iter().map(|&p| u_to_w.apply(p)).collect(), elements: mesh.elements.clone() };
+    let hb = boundary_trimesh(&hw);
+    let hloc = SurfaceLocator::new(&hb);
+    let mut pts: Vec<([f64; 3], f64)> = fr.sw.mesh.vertices.par_iter().map(|&p| (p, hloc.closest(p).2)).collect();
+    let bnodes: std::collections::BTreeSet<u32> = boundary_quads(&hw).unwrap_or_default().iter().flat_map(|q| q.nodes).collect();
+    let bnodes: Vec<u32> = bnodes.into_iter().collect();
+    pts.par_extend(bnodes.par_iter().map(|&v| (hw.nodes[v as usize], fr.sw.closest(hw.nodes[v as usize]).2)));
+    let dmax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+    if !(dmax > 0.0) {
+        return Vec::new();
+    }
+    let limit = (frac * dmax).min(at_most);
+    pts.into_iter().filter(|p| p.1 >= limit).map(|p| p.0).collect()
+}

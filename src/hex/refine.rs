@@ -230,6 +230,38 @@ pub fn refine_boxes(nodes: &[[u32; 3]], elements: &[[u32; 8]], boxes: &[([u32; 3
     refine_marked(nodes, elements, marked).0
 }
 
+/// Positions of a refinement's new nodes (`r.nodes[lattice.len()..]`, lattice
+/// units) from those of the lattice's nodes (`pos`): each new node at the
+/// trilinear map of the corners of a lattice cell that holds it (on a face or an
+/// edge, any of the cells there). `cells` are the lattice's elements and
+/// `cell_lattice` their lowest corners. Err names a node in no cell.
+pub fn interpolate_new_nodes(r: &Refined, lattice: &[[u32; 3]], elements: &[[u32; 8]], cell_lattice: &[[u32; 3]], pos: &[[f64; 3]]) -> Result<Vec<[f64; 3]>, String> {
+    let cell: HashMap<[u32; 3], usize> = cell_lattice.iter().enumerate().map(|(e, c)| (*c, e)).collect();
+    let mut out = pos.to_vec();
+    for x in &r.nodes[lattice.len()..] {
+        let base = (0..8u32).find_map(|k| {
+            let c: [u32; 3] = std::array::from_fn(|a| {
+                let f = x[a].floor();
+                (if k >> a & 1 == 1 && f == x[a] { f - 1.0 } else { f }).max(0.0) as u32
+            });
+            cell.get(&c).map(|&e| (c, e))
+        });
+        let Some((c, e)) = base else {
+            return Err(format!("node {x:?} lies in no cell of the lattice"));
+        };
+        let mut p = [0.0; 3];
+        for &v in &elements[e] {
+            let o = lattice[v as usize];
+            let w: f64 = (0..3).map(|a| if o[a] > c[a] { x[a] - c[a] as f64 } else { 1.0 - (x[a] - c[a] as f64) }).product();
+            for a in 0..3 {
+                p[a] += w * pos[v as usize][a];
+            }
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
 /// The refinement itself: every element's marked corners must have a template.
 pub fn refine_flags(nodes: &[[u32; 3]], elements: &[[u32; 8]], flags: &[bool]) -> Refined {
     let marked = |v: u32| flags[v as usize];

@@ -157,6 +157,8 @@ pub struct SurfaceMapTry {
     pub seconds: f64,
     /// Whether this mesh is the one returned.
     pub kept: bool,
+    /// Elements of the level split 3 x 3 x 3 by local refinement (0: the level as mapped).
+    pub split_elements: usize,
 }
 
 /// The result of the hex stage.

@@ -135,6 +135,7 @@ pub static OPTIONS: &[OptionInfo] = &[
     opt("hex.map.use_correspondence", Bool, false, "Seed the surface map with the diffusion correspondence (never for an unverified candidate)"),
     opt("hex.map.fit_planes", Bool, false, "Without a correspondence, fit the polycube's sub-voxel planes to the input before mapping"),
     opt("hex.map.surface_map", Str, false, "How the polycube's boundary goes onto the input: \"Projection\" (closest facing point and relaxation), \"Charts\" (inverse chart maps; the projection where a chart does not map) or \"Best\" (the charts, and the projection too when their mesh misses a goal; the better kept)"),
+    opt("hex.map.local_refinement", Integer, false, "Rounds of local refinement of the chosen level where its mesh is farthest from the input, when it misses the distance goal alone (0: none)"),
     opt("hex.surface.feature_angle", Number, false, "Dihedral angle (degrees) above which an input edge is a sharp feature"),
     opt("hex.surface.min_feature_length", Number, false, "Feature curves shorter than this fraction of the bounding-box diagonal are ignored"),
     opt("hex.surface.feature_median_angle", Number, false, "Feature curves whose median dihedral angle (degrees, 0 to 180) is below this are ignored"),

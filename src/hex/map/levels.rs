@@ -36,6 +36,26 @@ pub(super) struct Mapped {
     pub levels: Vec<LevelReport>,
     /// The fit statistics of every fit on the way.
     pub fit: Vec<FitStats>,
+    /// How the level's nodes were placed, for nodes added later ([`super::local`]).
+    pub placer: Placer,
+}
+
+/// What places a node of the polycube's domain on the input as the levels'
+/// nodes were placed: the polycube's frame, the start embedding (fitted planes)
+/// and the working frame, and the inverse chart maps when they are the surface map.
+#[derive(Clone)]
+pub(super) struct Placer {
+    pub frame: BoxFrame,
+    pub warp: Warp,
+    pub to_w: Affine,
+    pub charts: Option<ChartInverse>,
+}
+
+impl Placer {
+    /// The start embedding of a domain point `g` (grid units) in the working frame.
+    pub fn embed(&self, g: [f64; 3]) -> [f64; 3] {
+        self.to_w.apply(self.warp.apply(g))
+    }
 }
 
 /// What every level is mapped from: the polycube's frame and start embedding,
@@ -122,7 +142,8 @@ pub(super) fn map_levels(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &
     }
     let level = chosen.expect("a level is chosen");
     let targets = element_targets(&level.h, &start.warp, &start.to_w);
-    Ok(Mapped { level, targets, surface_map: smap, levels, fit: fit_stats })
+    let placer = Placer { frame: start.frame, warp: start.warp, to_w: start.to_w, charts: start.charts };
+    Ok(Mapped { level, targets, surface_map: smap, levels, fit: fit_stats, placer })
 }
 
 /// The frame, the start embedding (the polycube's sub-voxel planes fitted to the

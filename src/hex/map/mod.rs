@@ -33,6 +33,7 @@ pub mod charts;
 mod correspondence;
 mod features;
 mod levels;
+mod local;
 mod warp;
 
 use crate::context::{context_frame, Context};
@@ -42,6 +43,8 @@ use crate::hex::frame::Affine;
 use crate::hex::frames::{working_frames, Frames};
 use crate::hex::report::{MapMethod, SurfaceMapTry};
 use crate::hex::quality::{improve, MapStage};
+use crate::hex::distance::far_points;
+use crate::hex::work::Level;
 use crate::hex::{HexOptions, HexResult, QualityGoals, SurfaceMap};
 use crate::mesh::TriMesh;
 use crate::polycube::assembly::occupied_cell_box;
@@ -101,84 +104,136 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     check_progress(progress, 0.0, "hex: setup")?;
     let (fr, mesh_n) = working_frames(&input.surface, &input.to_user, opts)?;
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.8 };
-    let r = if opts.map.surface_map == SurfaceMap::Best {
+    let m = if opts.map.surface_map == SurfaceMap::Best {
         best_map(input, mesh_n.clone(), &fr, opts, t_all, &mut sub)?
     } else {
         map_and_improve(input, mesh_n.clone(), &fr, opts, t_all, &mut sub)?
     };
     let mut sub = SubProgress { inner: progress, lo: 0.8, hi: 1.0 };
-    finer_for_distance(r, input, mesh_n, &fr, opts, t_all, &mut sub)
+    finer_for_distance(m, input, mesh_n, &fr, opts, t_all, &mut sub)
+}
+
+/// A finished polycube mesh and the mapped level it was improved from.
+struct Meshed {
+    r: HexResult,
+    base: Base,
+}
+
+/// A mapped level before the quality steps: what local refinement starts from.
+struct Base {
+    level: Level,
+    stage: MapStage,
+    placer: levels::Placer,
 }
 
 /// [`SurfaceMap::Best`]: the charts first; the projection as well when their mesh
 /// misses a goal (and the charts did map: otherwise the first mesh already is the
 /// projection's); the mesh that ranks better by the goals is returned.
-fn best_map(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
+fn best_map(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<Meshed> {
     let mut o = opts.clone();
     o.map.surface_map = SurfaceMap::Charts;
     let t = Instant::now();
     let mut sub = SubProgress { inner: progress, lo: 0.0, hi: 0.5 };
-    let charts = map_and_improve(input, mesh_n.clone(), fr, &o, t_all, &mut sub)?;
+    let mut charts = map_and_improve(input, mesh_n.clone(), fr, &o, t_all, &mut sub)?;
     let charts_s = t.elapsed().as_secs_f64();
-    if opts.goals.missed(&charts) == 0 || charts.surface_map.method != MapMethod::Charts {
-        let mut r = charts;
-        r.surface_map.tried = vec![tried_map(&r, charts_s, true, &opts.goals)];
-        return Ok(r);
+    if opts.goals.missed(&charts.r) == 0 || charts.r.surface_map.method != MapMethod::Charts {
+        charts.r.surface_map.tried = vec![tried_map(&charts.r, charts_s, true, &opts.goals)];
+        return Ok(charts);
     }
     o.map.surface_map = SurfaceMap::Projection;
     let t = Instant::now();
     let mut sub = SubProgress { inner: progress, lo: 0.5, hi: 1.0 };
     let projection = map_and_improve(input, mesh_n, fr, &o, t_all, &mut sub)?;
     let projection_s = t.elapsed().as_secs_f64();
-    let keep_projection = opts.goals.beats(&projection, Some(&charts));
-    let tried = vec![tried_map(&charts, charts_s, !keep_projection, &opts.goals), tried_map(&projection, projection_s, keep_projection, &opts.goals)];
-    let mut r = if keep_projection { projection } else { charts };
-    r.surface_map.tried = tried;
-    r.seconds_total = t_all.elapsed().as_secs_f64();
-    Ok(r)
+    let keep_projection = opts.goals.beats(&projection.r, Some(&charts.r));
+    let tried = vec![tried_map(&charts.r, charts_s, !keep_projection, &opts.goals), tried_map(&projection.r, projection_s, keep_projection, &opts.goals)];
+    let mut m = if keep_projection { projection } else { charts };
+    m.r.surface_map.tried = tried;
+    m.r.seconds_total = t_all.elapsed().as_secs_f64();
+    Ok(m)
 }
 
-/// One level finer than the stopping rule's when the mesh misses the distance
-/// goal alone (no inverted element, minimum and mean met): a finer level
+/// A mesh that misses the distance goal alone (no inverted element, minimum and
+/// mean met) is refined where it is far from the input: first locally
+/// ([`local`]: up to `map.local_refinement` rounds, each splitting the level's
+/// elements around the points farthest from the last mesh), then, when that
+/// still misses a goal, one level finer than the stopping rule's. A finer level
 /// shortens the chords between boundary nodes, which is what the distance
-/// measures, while it does not mend badly shaped elements. Not with a level the
-/// caller fixed, above `map.max_level`, or when the finer level would pass
-/// `max_elements` (eight times the elements). The finer mesh, with the surface
-/// map that made `r`, is returned when it ranks better by the goals; both are
-/// listed in `surface_map.tried`.
-fn finer_for_distance(r: HexResult, input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
+/// measures, while it does not mend badly shaped elements. Neither with a level
+/// the caller fixed; no mesh past `max_elements`, no level above
+/// `map.max_level`. The mesh that ranks best by the goals is returned; every
+/// mesh built is listed in `surface_map.tried`.
+fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
     let goals = &opts.goals;
-    let next = r.level + 1;
-    let only_distance = !goals.misses_scaled_jacobian(&r) && !(r.hausdorff_relative <= goals.hausdorff);
-    if opts.map.level.is_some() || !only_distance || next > opts.map.max_level || r.quality.elements.saturating_mul(8) > opts.max_elements {
+    let only_distance = |r: &HexResult| !goals.misses_scaled_jacobian(r) && !(r.hausdorff_relative <= goals.hausdorff);
+    let Meshed { r, base } = m;
+    let next = base.level.h.level + 1;
+    let finer_allowed = next <= opts.map.max_level && r.quality.elements.saturating_mul(8) <= opts.max_elements;
+    if opts.map.level.is_some() || !only_distance(&r) || (opts.map.local_refinement == 0 && !finer_allowed) {
         return Ok(r);
     }
-    let mut o = opts.clone();
-    o.map.level = Some(next);
-    o.map.surface_map = if r.surface_map.method == MapMethod::Charts { SurfaceMap::Charts } else { SurfaceMap::Projection };
-    let t = Instant::now();
-    let finer = map_and_improve(input, mesh_n, fr, &o, t_all, progress)?;
-    let finer_s = t.elapsed().as_secs_f64();
-    let keep_finer = goals.beats(&finer, Some(&r));
     let mut tried = r.surface_map.tried.clone();
     if tried.is_empty() {
         tried.push(tried_map(&r, r.seconds_total, true, goals));
     }
-    if keep_finer {
-        tried.iter_mut().for_each(|t| t.kept = false);
+    let mut best = r;
+    let keep = |r: HexResult, entry: SurfaceMapTry, best: &mut HexResult, tried: &mut Vec<SurfaceMapTry>| {
+        if entry.kept {
+            tried.iter_mut().for_each(|t| t.kept = false);
+            *best = r;
+        }
+        tried.push(entry);
+    };
+    // local refinement, round by round from the last mesh
+    let mut boxes = Vec::new();
+    let mut marked_n = 0;
+    let mut from = best.mesh.clone();
+    for _ in 0..opts.map.local_refinement {
+        if goals.missed(&best) == 0 {
+            break;
+        }
+        // the points beyond half the goal's distance as well: the whole region
+        // near or past the goal, not only its farthest part
+        let far = far_points(&from, fr, local::FAR_SHARE, 0.5 * goals.hausdorff * fr.diag_w);
+        let marked = local::mark_far(&base.level, &far, &mut boxes);
+        let n = marked.iter().filter(|&&m| m).count();
+        if n == marked_n {
+            break;
+        }
+        marked_n = n;
+        let t = Instant::now();
+        let (lv, targets, split) = local::refine_level(&base.level, &marked, &base.placer, &fr.sw).map_err(|e| Error::Internal(format!("local refinement of the polycube map: {e}")))?;
+        if lv.h.mesh.elements.len() > opts.max_elements {
+            break;
+        }
+        let refined = improve(lv, targets, base.stage.clone(), fr, opts, t_all, progress)?;
+        from = refined.mesh.clone();
+        let mut entry = tried_map(&refined, t.elapsed().as_secs_f64(), goals.beats(&refined, Some(&best)), goals);
+        entry.split_elements = split;
+        keep(refined, entry, &mut best, &mut tried);
     }
-    tried.push(tried_map(&finer, finer_s, keep_finer, goals));
-    let mut out = if keep_finer { finer } else { r };
-    out.surface_map.tried = tried;
-    out.seconds_total = t_all.elapsed().as_secs_f64();
-    Ok(out)
+    // one level finer, when a goal is still missed
+    if goals.missed(&best) > 0 && finer_allowed {
+        let mut o = opts.clone();
+        o.map.level = Some(next);
+        o.map.surface_map = if best.surface_map.method == MapMethod::Charts { SurfaceMap::Charts } else { SurfaceMap::Projection };
+        let t = Instant::now();
+        let finer = map_and_improve(input, mesh_n, fr, &o, t_all, progress)?.r;
+        let entry = tried_map(&finer, t.elapsed().as_secs_f64(), goals.beats(&finer, Some(&best)), goals);
+        keep(finer, entry, &mut best, &mut tried);
+    }
+    best.surface_map.tried = tried;
+    best.seconds_total = t_all.elapsed().as_secs_f64();
+    Ok(best)
 }
 
 /// Map the levels with `opts`' surface map and run the quality steps on the chosen one.
-fn map_and_improve(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
+fn map_and_improve(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<Meshed> {
     let mapped = levels::map_levels(input, mesh_n, fr, opts, progress)?;
     let stage = MapStage { surface_map: mapped.surface_map, levels: mapped.levels, fit: mapped.fit, lattice: None };
-    improve(mapped.level, mapped.targets, stage, fr, opts, t_all, progress)
+    let base = Base { level: mapped.level.clone(), stage: stage.clone(), placer: mapped.placer };
+    let r = improve(mapped.level, mapped.targets, stage, fr, opts, t_all, progress)?;
+    Ok(Meshed { r, base })
 }
 
 /// The report entry of one surface map's finished mesh.
@@ -194,6 +249,7 @@ fn tried_map(r: &HexResult, seconds: f64, kept: bool, goals: &QualityGoals) -> S
         goals_missed: goals.missed(r),
         seconds,
         kept,
+        split_elements: 0,
     }
 }
 

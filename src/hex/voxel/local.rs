@@ -16,7 +16,7 @@ use crate::hex::grid::lattice_hex;
 use crate::hex::lattice::LatticePlanes;
 use crate::hex::report::HexResult;
 use crate::hex::stages::{MeshFigures, RefineStart};
-use crate::hex::{topology, HexMesh};
+use crate::hex::HexMesh;
 use crate::mesh::TriMesh;
 
 impl Search<'_> {
@@ -115,24 +115,13 @@ pub(super) fn start_figures(r: &HexResult) -> MeshFigures {
 const REFINE_FAR_SHARE: f64 = 0.8;
 
 /// Boxes of lattice nodes around the points where `mesh` (user coordinates) is
-/// farthest from the input: input vertices and boundary nodes at least `frac` times
-/// the largest such distance away, each the voxel it lies in, within the lattice.
+/// farthest from the input ([`crate::hex::distance::far_points`] with `frac`),
+/// each the voxel it lies in, within the lattice.
 pub(super) fn far_boxes(mesh: &HexMesh, fr: &Frames, lattice: &Lattice, frac: f64) -> Vec<([u32; 3], [u32; 3])> {
-    let Some(u_to_w) = fr.w_to_u.inverse() else { return Vec::new() };
-    let hw = HexMesh { nodes: mesh.nodes.iter().map(|&p| u_to_w.apply(p)).collect(), elements: mesh.elements.clone() };
-    let hb = crate::hex::distance::boundary_trimesh(&hw);
-    let hloc = crate::geometry::SurfaceLocator::new(&hb);
-    let mut pts: Vec<([f64; 3], f64)> = fr.sw.mesh.vertices.iter().map(|&p| (p, hloc.closest(p).2)).collect();
-    let bnodes: std::collections::BTreeSet<u32> = topology::boundary_quads(&hw).unwrap_or_default().iter().flat_map(|q| q.nodes).collect();
-    pts.extend(bnodes.iter().map(|&v| (hw.nodes[v as usize], fr.sw.closest(hw.nodes[v as usize]).2)));
-    let dmax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
-    if !(dmax > 0.0) {
-        return Vec::new();
-    }
     let dims = lattice.vol.grid.dims;
-    pts.iter()
-        .filter(|p| p.1 >= frac * dmax)
-        .map(|(p, _)| {
+    crate::hex::distance::far_points(mesh, fr, frac, f64::INFINITY)
+        .iter()
+        .map(|p| {
             let c = lattice.planes.to_lattice(*p);
             (
                 std::array::from_fn(|a| c[a].floor().clamp(0.0, dims[a] as f64 - 1.0) as u32),

@@ -18,7 +18,6 @@ use crate::hex::stages::{LatticeDetails, RefineStart, RefinementDetails, Revoxel
 use crate::hex::surface::Surface;
 use crate::hex::work::{boundary_graph, Level, Role, Work};
 use crate::hex::{topology, HexMesh, HexOptions};
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// The hex mesh of one lattice, or with `refine` of the lattice with the voxels in
@@ -134,28 +133,8 @@ fn refined_lattice(
     let refined = RefinementDetails { boxes: boxes.to_vec(), elements_split: r.split, transition_elements: r.transitions, start, revoxelised };
     let (start, mut fit_stats) = match fitted {
         Some((coarse_fit, fit_stats)) => {
-            let cell: HashMap<[u32; 3], usize> = h.elem_lattice.iter().enumerate().map(|(e, c)| (*c, e)).collect();
-            let mut from_fit = coarse_fit.mesh.nodes;
-            for x in &r.nodes[h.node_lattice.len()..] {
-                // a cell of the coarse lattice that holds x (on a face or an edge: any of them)
-                let base = (0..8u32).find_map(|k| {
-                    let c: [u32; 3] = std::array::from_fn(|a| {
-                        let f = x[a].floor();
-                        (if k >> a & 1 == 1 && f == x[a] { f - 1.0 } else { f }).max(0.0) as u32
-                    });
-                    cell.get(&c).map(|&e| (c, e))
-                });
-                let Some((c, e)) = base else {
-                    return Err(Error::Internal(format!("local refinement: node {x:?} in no cell of the lattice")));
-                };
-                let mut p = [0.0; 3];
-                for &v in &h.mesh.elements[e] {
-                    let o = h.node_lattice[v as usize];
-                    let w: f64 = (0..3).map(|a| if o[a] > c[a] { x[a] - c[a] as f64 } else { 1.0 - (x[a] - c[a] as f64) }).product();
-                    p = add(p, scale(from_fit[v as usize], w));
-                }
-                from_fit.push(p);
-            }
+            let from_fit = crate::hex::refine::interpolate_new_nodes(&r, &h.node_lattice, &h.mesh.elements, &h.elem_lattice, &coarse_fit.mesh.nodes)
+                .map_err(|e| Error::Internal(format!("local refinement: {e}")))?;
             (from_fit, fit_stats)
         }
         None => (r.nodes.iter().map(|&x| planes.to_world(x)).collect(), Vec::new()),
