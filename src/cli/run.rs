@@ -142,9 +142,12 @@ pub struct HexArgs {
     /// Coverage step: pin nodes to input vertices farther than F times the distance goal (e.g. 0.6; off by default).
     #[arg(long, value_name = "F", help_heading = "Grid-based fallback")]
     pub pin_uncovered: Option<f64>,
-    /// Local refinement: up to N rounds that split the elements around the points farthest from the mesh 3 x 3 x 3, with conforming transition elements: the polycube map's chosen level when its mesh misses the distance goal alone, and the fallback's voxels (off by default; docs/hex.md).
-    #[arg(long, value_name = "N", help_heading = "Mesh size and quality goals")]
+    /// Local refinement: up to N rounds that split the fallback's voxels around the points farthest from its mesh 3 x 3 x 3, with conforming transition elements (off by default; docs/hex.md).
+    #[arg(long, value_name = "N", help_heading = "Grid-based fallback")]
     pub local_refinement: Option<usize>,
+    /// Local refinement of the polycube map: up to N rounds that split the chosen level's elements around the points farthest from its mesh 3 x 3 x 3, with conforming transition elements, when it misses the distance goal alone (off by default; docs/hex.md "Local refinement of the polycube map").
+    #[arg(long, value_name = "N", help_heading = "Mesh size and quality goals")]
+    pub map_local_refinement: Option<usize>,
     /// Quality goal: smallest acceptable minimum scaled Jacobian, in (-1, 1] (default 0.3). Meshes are ranked by the goals they miss; the fallback refines its lattice while the best misses one.
     #[arg(long, value_name = "S", help_heading = "Mesh size and quality goals")]
     pub goal_min_sj: Option<f64>,
@@ -180,8 +183,10 @@ pub fn hex_options(a: &HexArgs, d: &HexDevArgs, hex: &mut HexOptions) -> Result<
     hex.quality.capture_features = !d.no_capture_features;
     hex.quality.feature_sheets = !d.no_feature_sheets;
     if let Some(n) = a.local_refinement {
-        hex.map.local_refinement = n;
         hex.fallback.local_refinement = n;
+    }
+    if let Some(n) = a.map_local_refinement {
+        hex.map.local_refinement = n;
     }
     if let Some(deg) = d.feature_median_angle {
         hex.surface.feature_median_angle = deg;
