@@ -399,4 +399,10 @@ fn a_mesh_far_from_the_input_in_one_place_is_refined_there_alone() {
         }
     }
     assert!(edges.values().all(|&n| n == 2), "the refined mesh's boundary is not closed and manifold");
+    // a box warped and roughened all over with a distance goal every point
+    // misses: the far region is the whole level, whose split would outgrow the
+    // level one finer, so no round is meshed
+    opts.goals.hausdorff = 1e-12;
+    let r = build_hex_mesh(&input(&cube, warped(polycube_surface(&cube, 4), 0.01)), &opts, &mut NoProgress).unwrap();
+    assert!(r.surface_map.tried.iter().all(|t| t.split_elements == 0), "{:?}", r.surface_map.tried);
 }

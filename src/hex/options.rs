@@ -91,6 +91,8 @@ pub struct MapOptions {
     /// conforming transitions, and runs the quality steps again; the level one
     /// finer is still meshed after them when a goal is missed, and the best mesh
     /// by the goals is kept (docs/hex.md "Local refinement of the polycube map").
+    /// A round whose mesh would have as many elements as the finer level (eight
+    /// times the level's) ends the rounds.
     /// Off by default: on cgal_dragknob it meets the goals with fewer elements
     /// than the finer level but a lower minimum and mean (BENCHMARKS.md). Not
     /// with a fixed `level`.

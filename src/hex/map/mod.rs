@@ -161,7 +161,8 @@ fn best_map(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t
 /// shortens the chords between boundary nodes, which is what the distance
 /// measures, while it does not mend badly shaped elements. Neither with a level
 /// the caller fixed; no mesh past `max_elements`, no level above
-/// `map.max_level`. The mesh that ranks best by the goals is returned; every
+/// `map.max_level`, no locally refined mesh with as many elements as the finer
+/// level would have. The mesh that ranks best by the goals is returned; every
 /// mesh built is listed in `surface_map.tried`.
 fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<HexResult> {
     let goals = &opts.goals;
@@ -203,7 +204,11 @@ fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames,
         marked_n = n;
         let t = Instant::now();
         let (lv, targets, split) = local::refine_level(&base.level, &marked, &base.placer, &fr.sw).map_err(|e| Error::Internal(format!("local refinement of the polycube map: {e}")))?;
-        if lv.h.mesh.elements.len() > opts.max_elements {
+        // no more elements than the level one finer has (eight times the
+        // level's): a far region that covers a quarter of the level or more is
+        // a job for the finer level, which keeps the lattice's structure
+        let elements = lv.h.mesh.elements.len();
+        if elements > opts.max_elements || elements >= 8 * base.level.h.mesh.elements.len() {
             break;
         }
         let refined = improve(lv, targets, base.stage.clone(), fr, opts, t_all, progress)?;
