@@ -60,9 +60,9 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
     // lattice units -> grid units (one cell = 3 sub-voxels of `subdiv` elements)
     let per_cell = (3 * h.subdiv) as f64;
     let grid = |x: [f64; 3]| x.map(|c| c / per_cell);
-    let mut pos = interpolate_new_nodes(&r, &h.node_lattice, &h.mesh.elements, &h.elem_lattice, &lv.pos)?;
-    let mesh = HexMesh { nodes: pos.clone(), elements: r.elements.clone() };
-    let bquads: Vec<[u32; 4]> = topology::boundary_quads(&mesh).map_err(|e| e.to_string())?.into_iter().map(|q| q.nodes).collect();
+    let pos = interpolate_new_nodes(&r, &h.node_lattice, &h.mesh.elements, &h.elem_lattice, &lv.pos)?;
+    let mut m = HexMesh { nodes: pos, elements: r.elements };
+    let bquads: Vec<[u32; 4]> = topology::boundary_quads(&m).map_err(|e| e.to_string())?.into_iter().map(|q| q.nodes).collect();
     // the old nodes keep their roles (the refinement does not move the boundary)
     let mut role = lv.role.clone();
     role.resize(n, Role::Interior);
@@ -74,7 +74,7 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
     let curve_nb = split_curves(lv, &r.nodes, &mut role);
     let mut attach = lv.attach.clone();
     attach.resize(n, u32::MAX);
-    let nrm = quad_normals(n, &bquads, &pos);
+    let nrm = quad_normals(n, &bquads, &m.nodes);
     let placed: Vec<Option<([f64; 3], u32)>> = (n_old..n)
         .into_par_iter()
         .map(|v| {
@@ -85,7 +85,7 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
             let (q, t) = match charted {
                 Some(l) => (placer.to_w.apply(l.point), l.triangle),
                 None => {
-                    let (q, t, _) = sw.closest_facing(pos[v], nrm[v], 0.0);
+                    let (q, t, _) = sw.closest_facing(m.nodes[v], nrm[v], 0.0);
                     (q, t)
                 }
             };
@@ -97,12 +97,11 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
         .collect();
     for (i, p) in placed.into_iter().enumerate() {
         if let Some((q, t)) = p {
-            pos[n_old + i] = q;
+            m.nodes[n_old + i] = q;
             attach[n_old + i] = t;
         }
     }
     // inside: the interpolated positions or the harmonic map, whichever is better
-    let mut m = HexMesh { nodes: pos, elements: r.elements.clone() };
     let nbr = topology::node_neighbours(n, &topology::edges(&m));
     let mut harm = m.nodes.clone();
     harmonic_interior(&nbr, &role, &mut harm, 1e-9, 5000);
@@ -112,7 +111,7 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
     if (q_interp.inverted, -q_interp.min) < (q_harm.inverted, -q_harm.min) {
         m.nodes = interp;
     }
-    let targets: Vec<[f64; 3]> = r
+    let targets: Vec<[f64; 3]> = m
         .elements
         .iter()
         .map(|el| {
@@ -122,7 +121,7 @@ pub(super) fn refine_level(lv: &Level, marked: &[bool], placer: &Placer, sw: &Su
         })
         .collect();
     let mut hl = h.clone();
-    hl.mesh = HexMesh { nodes: r.nodes.iter().map(|&x| grid(x)).collect(), elements: r.elements };
+    hl.mesh = HexMesh { nodes: r.nodes.iter().map(|&x| grid(x)).collect(), elements: m.elements };
     let level = Level { h: hl, pos: m.nodes, attach, role, curve_nb, bquads, released_corners: lv.released_corners.clone() };
     Ok((level, targets, r.split))
 }

@@ -113,10 +113,11 @@ pub fn build_hex_mesh(input: &HexInput, opts: &HexOptions, progress: &mut dyn Pr
     finer_for_distance(m, input, mesh_n, &fr, opts, t_all, &mut sub)
 }
 
-/// A finished polycube mesh and the mapped level it was improved from.
+/// A finished polycube mesh and, when local refinement is on, the mapped level
+/// it was improved from.
 struct Meshed {
     r: HexResult,
-    base: Base,
+    base: Option<Base>,
 }
 
 /// A mapped level before the quality steps: what local refinement starts from.
@@ -168,7 +169,7 @@ fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames,
     let goals = &opts.goals;
     let only_distance = |r: &HexResult| !goals.misses_scaled_jacobian(r) && !(r.hausdorff_relative <= goals.hausdorff);
     let Meshed { r, base } = m;
-    let next = base.level.h.level + 1;
+    let next = r.level + 1;
     let finer_allowed = next <= opts.map.max_level && r.quality.elements.saturating_mul(8) <= opts.max_elements;
     if opts.map.level.is_some() || !only_distance(&r) || (opts.map.local_refinement == 0 && !finer_allowed) {
         return Ok(r);
@@ -189,7 +190,8 @@ fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames,
     let mut boxes = Vec::new();
     let mut marked_n = 0;
     let mut from = best.mesh.clone();
-    for _ in 0..opts.map.local_refinement {
+    for _ in 0..base.as_ref().map_or(0, |_| opts.map.local_refinement) {
+        let base = base.as_ref().expect("kept when local refinement is on");
         if goals.missed(&best) == 0 {
             break;
         }
@@ -236,7 +238,8 @@ fn finer_for_distance(m: Meshed, input: &HexInput, mesh_n: TriMesh, fr: &Frames,
 fn map_and_improve(input: &HexInput, mesh_n: TriMesh, fr: &Frames, opts: &HexOptions, t_all: Instant, progress: &mut dyn Progress) -> Result<Meshed> {
     let mapped = levels::map_levels(input, mesh_n, fr, opts, progress)?;
     let stage = MapStage { surface_map: mapped.surface_map, levels: mapped.levels, fit: mapped.fit, lattice: None };
-    let base = Base { level: mapped.level.clone(), stage: stage.clone(), placer: mapped.placer };
+    // the level before the quality steps, only for local refinement
+    let base = (opts.map.local_refinement > 0).then(|| Base { level: mapped.level.clone(), stage: stage.clone(), placer: mapped.placer });
     let r = improve(mapped.level, mapped.targets, stage, fr, opts, t_all, progress)?;
     Ok(Meshed { r, base })
 }
